@@ -1,0 +1,252 @@
+//! Time as the caller supplies it: the [`Clock`] trait, [`Deadline`]s for the planner's time
+//! budgets (the paper's `t_exp`, `t_root`, `t_goal`), and [`FakeClock`] for deterministic runs.
+//!
+//! The planner never reads a system timer. Every budget is measured on the clock passed to the
+//! call, so a firmware passes its hardware timer, the simulator a wall or a virtual clock, and a
+//! test a fake clock. Besides reading time, the planner *reports the work it does* through
+//! [`Clock::charge`]; a real clock ignores that, while a virtual clock advances by it, which makes
+//! a run bit-for-bit repeatable on any machine.
+
+use core::cell::Cell;
+use core::time::Duration;
+
+/// A monotonic time source.
+///
+/// Contract, which the planner relies on:
+/// - [`now`](Clock::now) never decreases, never fails and is cheap enough to read once per
+///   unit of planner work (every expansion and every few rewiring steps);
+/// - [`ticks_per_second`](Clock::ticks_per_second) is constant and non-zero;
+/// - ticks may start anywhere; only differences are used;
+/// - [`charge`](Clock::charge) is called with the amount of work just done (one unit is one
+///   grid cell tested, one node visited, one metric evaluated); a clock that measures real time
+///   ignores it (the default).
+///
+/// A clock that never advances is allowed: every planner call also stops after a fixed number
+/// of work steps, so a frozen clock gives bounded calls, not a hang.
+pub trait Clock {
+    /// The current time in ticks.
+    fn now(&self) -> u64;
+
+    /// How many ticks make a second.
+    fn ticks_per_second(&self) -> u64;
+
+    /// Reports `units` of work done since the last report. Ignored by real-time clocks.
+    #[inline]
+    fn charge(&self, units: u32) {
+        let _ = units;
+    }
+
+    /// A duration in this clock's ticks (rounded down, saturating).
+    fn ticks(&self, d: Duration) -> u64 {
+        let t = d.as_nanos() * self.ticks_per_second() as u128 / 1_000_000_000;
+        u64::try_from(t).unwrap_or(u64::MAX)
+    }
+
+    /// A tick count of this clock as a duration.
+    fn duration(&self, ticks: u64) -> Duration {
+        let rate = self.ticks_per_second().max(1) as u128;
+        let ns = ticks as u128 * 1_000_000_000 / rate;
+        Duration::from_nanos(u64::try_from(ns).unwrap_or(u64::MAX))
+    }
+}
+
+impl<C: Clock + ?Sized> Clock for &C {
+    fn now(&self) -> u64 {
+        (**self).now()
+    }
+    fn ticks_per_second(&self) -> u64 {
+        (**self).ticks_per_second()
+    }
+    fn charge(&self, units: u32) {
+        (**self).charge(units)
+    }
+}
+
+/// A point in time after which a budget is spent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Deadline {
+    start: u64,
+    end: u64,
+}
+
+impl Deadline {
+    /// The deadline `budget` from now on `clock`.
+    pub fn after<C: Clock + ?Sized>(clock: &C, budget: Duration) -> Self {
+        let start = clock.now();
+        Self {
+            start,
+            end: start.saturating_add(clock.ticks(budget)),
+        }
+    }
+
+    /// The deadline `ticks` after `start`.
+    pub const fn from_ticks(start: u64, ticks: u64) -> Self {
+        Self {
+            start,
+            end: start.saturating_add(ticks),
+        }
+    }
+
+    /// Whether the budget is spent (the clock reads at or past the end). A zero budget is
+    /// expired at once.
+    #[inline]
+    pub fn expired<C: Clock + ?Sized>(&self, clock: &C) -> bool {
+        clock.now() >= self.end
+    }
+
+    /// Ticks left, zero once expired.
+    pub fn remaining<C: Clock + ?Sized>(&self, clock: &C) -> u64 {
+        self.end.saturating_sub(clock.now())
+    }
+
+    /// Ticks since the deadline was set.
+    pub fn elapsed<C: Clock + ?Sized>(&self, clock: &C) -> u64 {
+        clock.now().saturating_sub(self.start)
+    }
+
+    /// The tick at which the budget ends.
+    pub const fn end(&self) -> u64 {
+        self.end
+    }
+
+    /// The earlier of two deadlines (a sub-budget never outlives its caller's budget).
+    pub fn min(self, other: Deadline) -> Deadline {
+        if other.end < self.end { other } else { self }
+    }
+}
+
+/// A clock for tests and virtual-time simulation. It reads a counter that advances
+/// - by hand ([`FakeClock::advance`], [`FakeClock::set`]),
+/// - by `step` ticks at every reading ([`FakeClock::with_step`]), so a loop bounded by a
+///   deadline always ends, and/or
+/// - by `per_unit` ticks per unit of work the planner reports ([`FakeClock::with_work_cost`]):
+///   the virtual clock, whose time is a deterministic function of the work done.
+#[derive(Debug, Default)]
+pub struct FakeClock {
+    now: Cell<u64>,
+    rate: u64,
+    step: u64,
+    per_unit: u64,
+    work: Cell<u64>,
+}
+
+impl FakeClock {
+    /// A clock at tick 0 running at `ticks_per_second` (at least 1), advanced only by hand.
+    pub const fn new(ticks_per_second: u64) -> Self {
+        Self {
+            now: Cell::new(0),
+            rate: if ticks_per_second == 0 {
+                1
+            } else {
+                ticks_per_second
+            },
+            step: 0,
+            per_unit: 0,
+            work: Cell::new(0),
+        }
+    }
+
+    /// A nanosecond clock: 10^9 ticks per second.
+    pub const fn nanos() -> Self {
+        Self::new(1_000_000_000)
+    }
+
+    /// Advances by `step` ticks after every reading.
+    pub const fn with_step(mut self, step: u64) -> Self {
+        self.step = step;
+        self
+    }
+
+    /// Advances by `per_unit` ticks per unit of work charged.
+    pub const fn with_work_cost(mut self, per_unit: u64) -> Self {
+        self.per_unit = per_unit;
+        self
+    }
+
+    /// Moves the clock forward by `ticks`.
+    pub fn advance(&self, ticks: u64) {
+        self.now.set(self.now.get().saturating_add(ticks));
+    }
+
+    /// Moves the clock forward by a duration.
+    pub fn advance_by(&self, d: Duration) {
+        self.advance(self.ticks(d));
+    }
+
+    /// Sets the clock to `ticks` if that is not in the past (a clock never goes back).
+    pub fn set(&self, ticks: u64) {
+        self.now.set(self.now.get().max(ticks));
+    }
+
+    /// Total work units charged so far.
+    pub fn work(&self) -> u64 {
+        self.work.get()
+    }
+
+    /// The current reading without the automatic step.
+    pub fn peek(&self) -> u64 {
+        self.now.get()
+    }
+}
+
+impl Clock for FakeClock {
+    fn now(&self) -> u64 {
+        let t = self.now.get();
+        self.now.set(t.saturating_add(self.step));
+        t
+    }
+
+    fn ticks_per_second(&self) -> u64 {
+        self.rate
+    }
+
+    fn charge(&self, units: u32) {
+        self.work.set(self.work.get().saturating_add(units as u64));
+        self.advance(self.per_unit.saturating_mul(units as u64));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deadlines_on_a_hand_advanced_clock() {
+        let c = FakeClock::new(1_000);
+        let d = Deadline::after(&c, Duration::from_millis(150));
+        assert_eq!(d.end(), 150);
+        assert!(!d.expired(&c));
+        c.advance(149);
+        assert!(!d.expired(&c));
+        assert_eq!(d.remaining(&c), 1);
+        c.advance(1);
+        assert!(d.expired(&c));
+        assert_eq!(d.remaining(&c), 0);
+        c.set(10);
+        assert_eq!(c.peek(), 150, "never goes back");
+        assert!(Deadline::after(&c, Duration::ZERO).expired(&c));
+    }
+
+    #[test]
+    fn a_stepping_clock_ends_every_deadline_loop() {
+        let c = FakeClock::nanos().with_step(1_000);
+        let d = Deadline::after(&c, Duration::from_micros(50));
+        let mut spins = 0;
+        while !d.expired(&c) {
+            spins += 1;
+        }
+        assert_eq!(spins, 49);
+    }
+
+    #[test]
+    fn work_advances_a_virtual_clock() {
+        let c = FakeClock::nanos().with_work_cost(20);
+        c.charge(5);
+        c.charge(10);
+        assert_eq!(c.peek(), 300);
+        assert_eq!(c.work(), 15);
+        assert_eq!(c.duration(1_500_000), Duration::from_micros(1_500));
+        assert_eq!(c.ticks(Duration::from_secs(u64::MAX)), u64::MAX);
+    }
+}

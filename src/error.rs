@@ -1,0 +1,106 @@
+//! Error types: one small `Copy` enum per layer, each with `Display`, `core::error::Error` and,
+//! under the `defmt` feature, `defmt::Format`.
+//!
+//! Running out of time is not an error (the planner reports it as progress); these enums are for
+//! input the planner cannot accept and for capacities that are exhausted. A function that
+//! returns one of them has left its data structure exactly as it was.
+
+macro_rules! error_enum {
+    ($(#[$meta:meta])* pub enum $name:ident { $($(#[$vmeta:meta])* $variant:ident => $text:literal,)+ }) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub enum $name {
+            $($(#[$vmeta])* $variant,)+
+        }
+
+        impl core::fmt::Display for $name {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str(match self {
+                    $(Self::$variant => $text,)+
+                })
+            }
+        }
+
+        impl core::error::Error for $name {}
+    };
+}
+
+error_enum! {
+    /// A grid description that cannot be used.
+    pub enum MapError {
+        /// Width or height is zero.
+        EmptyGrid => "grid width and height must be positive",
+        /// The byte slice holds fewer than `ceil(width * height / 8)` bytes.
+        BufferTooShort => "occupancy buffer shorter than width * height bits",
+        /// The cell size is not a finite positive number.
+        BadCellSize => "cell size must be finite and positive",
+    }
+}
+
+error_enum! {
+    /// A position given at the API edge that the planner refuses.
+    pub enum InputError {
+        /// A coordinate is NaN or infinite.
+        NotFinite => "coordinate is NaN or infinite",
+        /// The position lies outside the map's bounds.
+        OutOfBounds => "position outside the map",
+        /// The position lies in (or within the safety margin of) an obstacle.
+        InObstacle => "position inside an obstacle",
+    }
+}
+
+error_enum! {
+    /// A tree operation that could not be carried out; the tree is unchanged.
+    pub enum TreeError {
+        /// The arena holds its capacity of nodes.
+        Full => "tree arena full",
+        /// The id does not name a node of this tree.
+        UnknownNode => "unknown node id",
+        /// The new parent lies in the child's own subtree: the edge would close a cycle.
+        WouldCycle => "edge would create a cycle",
+        /// The caller's buffer is too small for the path.
+        BufferTooSmall => "path buffer too small",
+    }
+}
+
+error_enum! {
+    /// A dynamic-obstacle operation that could not be carried out; the set is unchanged.
+    pub enum ObstacleError {
+        /// The set holds its capacity of obstacles.
+        Full => "obstacle set full",
+        /// No obstacle has this id (never added, or already removed).
+        UnknownId => "unknown obstacle id",
+        /// Centre not finite, or radius not finite and positive.
+        BadCircle => "circle centre must be finite and radius finite and positive",
+    }
+}
+
+error_enum! {
+    /// A spatial-index operation that could not be carried out; the index is unchanged.
+    pub enum IndexError {
+        /// The node id is not below the index's capacity.
+        IdOutOfRange => "node id beyond the index capacity",
+        /// The node is already in the index (insert) or not in it (remove).
+        Membership => "node already present (insert) or absent (remove)",
+        /// The position is not finite.
+        NotFinite => "position is NaN or infinite",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_is_a_sentence() {
+        use core::fmt::Write;
+        let mut s = heapless::String::<64>::new();
+        write!(s, "{}", TreeError::Full).unwrap();
+        assert_eq!(s, "tree arena full");
+        let e: &dyn core::error::Error = &InputError::NotFinite;
+        s.clear();
+        write!(s, "{e}").unwrap();
+        assert!(s.contains("NaN"));
+    }
+}

@@ -1,0 +1,392 @@
+//! Spatial index over a tree's nodes: Euclidean nearest and within-radius queries (the paper's
+//! `Nearest` and `Nearby`) whose cost grows with the neighbourhood, not with the tree.
+//!
+//! A fixed grid of at most `B` square buckets covers the map; each bucket keeps an intrusive
+//! doubly linked list of node ids (arrays of capacity `N`, nothing allocated). A within-radius
+//! query visits only the buckets that overlap the query disc's bounding box. A nearest query
+//! visits square rings of buckets outward from the query's bucket and stops as soon as the ring
+//! still to come cannot hold anything closer than the best found. With buckets about the size
+//! of the planner's neighbourhood radius (`e_max`) a `Nearby` query reads 9 buckets.
+//!
+//! The index stores ids only; queries read positions from the slice the tree exposes
+//! ([`crate::tree::Tree::positions`]), so a node must keep its position while it is indexed
+//! (tree nodes never move). [`linear_nearest`] and [`linear_within`] are the brute-force
+//! oracles the tests compare against.
+
+use core::ops::ControlFlow;
+
+use crate::error::IndexError;
+use crate::geometry::Point;
+use crate::tree::NodeId;
+
+const NONE: u16 = u16::MAX;
+
+/// A bucket grid over `[0, width] x [0, height]` indexing up to `N` nodes in at most `B`
+/// buckets.
+#[derive(Clone, Debug)]
+pub struct SpatialIndex<const N: usize, const B: usize> {
+    head: [u16; B],
+    next: [u16; N],
+    prev: [u16; N],
+    bucket_of: [u16; N],
+    cols: u16,
+    rows: u16,
+    side: f32,
+    inv_side: f32,
+    len: usize,
+}
+
+impl<const N: usize, const B: usize> SpatialIndex<N, B> {
+    const SIZES_FIT: () = assert!(
+        N > 0 && N < NONE as usize && B > 0 && B < NONE as usize,
+        "SpatialIndex capacities must be 1..65535"
+    );
+
+    /// An empty index over a `width x height` metre map with square buckets of side at least
+    /// `min_side` metres (larger when `B` buckets of that side would not cover the map).
+    /// `None` unless all three are finite and positive.
+    pub fn new(width: f32, height: f32, min_side: f32) -> Option<Self> {
+        let () = Self::SIZES_FIT;
+        let good = |v: f32| v.is_finite() && v > 0.0;
+        if !(good(width) && good(height) && good(min_side)) {
+            return None;
+        }
+        let area_side = libm::sqrtf(width * height / B as f32);
+        let mut side = min_side.max(area_side);
+        let count = |s: f32| (libm::ceilf(width / s), libm::ceilf(height / s));
+        // Rounding up can overshoot B a little: grow the side until it fits (a few steps).
+        for _ in 0..64 {
+            let (c, r) = count(side);
+            if c * r <= B as f32 {
+                break;
+            }
+            side *= 1.05;
+        }
+        let (c, r) = count(side);
+        if c * r > B as f32 {
+            return None;
+        }
+        Some(Self {
+            head: [NONE; B],
+            next: [NONE; N],
+            prev: [NONE; N],
+            bucket_of: [NONE; N],
+            cols: c as u16,
+            rows: r as u16,
+            side,
+            inv_side: 1.0 / side,
+            len: 0,
+        })
+    }
+
+    /// Side of a bucket in metres.
+    pub fn bucket_side(&self) -> f32 {
+        self.side
+    }
+
+    /// Buckets per row and per column.
+    pub fn shape(&self) -> (u16, u16) {
+        (self.cols, self.rows)
+    }
+
+    /// Number of indexed nodes.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether nothing is indexed.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether `id` is indexed.
+    pub fn contains(&self, id: NodeId) -> bool {
+        self.bucket_of.get(id.index()).is_some_and(|&b| b != NONE)
+    }
+
+    /// Removes every node: O(N + B).
+    pub fn clear(&mut self) {
+        self.head.fill(NONE);
+        self.bucket_of.fill(NONE);
+        self.len = 0;
+    }
+
+    /// Indexes node `id` at position `p`. Positions outside the map go to the nearest border
+    /// bucket (queries stay exact).
+    pub fn insert(&mut self, id: NodeId, p: Point) -> Result<(), IndexError> {
+        let i = id.index();
+        if i >= N {
+            return Err(IndexError::IdOutOfRange);
+        }
+        if !p.is_finite() {
+            return Err(IndexError::NotFinite);
+        }
+        if self.bucket_of[i] != NONE {
+            return Err(IndexError::Membership);
+        }
+        let (c, r) = self.bucket_coords(p);
+        let b = r as usize * self.cols as usize + c as usize;
+        let first = self.head[b];
+        self.next[i] = first;
+        self.prev[i] = NONE;
+        if first != NONE {
+            self.prev[first as usize] = id.0;
+        }
+        self.head[b] = id.0;
+        self.bucket_of[i] = b as u16;
+        self.len += 1;
+        Ok(())
+    }
+
+    /// Removes node `id`: O(1).
+    pub fn remove(&mut self, id: NodeId) -> Result<(), IndexError> {
+        let i = id.index();
+        let b = *self.bucket_of.get(i).ok_or(IndexError::IdOutOfRange)?;
+        if b == NONE {
+            return Err(IndexError::Membership);
+        }
+        let (prev, next) = (self.prev[i], self.next[i]);
+        if prev == NONE {
+            self.head[b as usize] = next;
+        } else {
+            self.next[prev as usize] = next;
+        }
+        if next != NONE {
+            self.prev[next as usize] = prev;
+        }
+        self.bucket_of[i] = NONE;
+        self.len -= 1;
+        Ok(())
+    }
+
+    /// The indexed node nearest to `q` (Euclidean) with its squared distance.
+    pub fn nearest(&self, q: Point, positions: &[Point]) -> Option<(NodeId, f32)> {
+        self.nearest_where(q, positions, |_| true)
+    }
+
+    /// The nearest indexed node among those for which `accept` is true.
+    pub fn nearest_where<F>(
+        &self,
+        q: Point,
+        positions: &[Point],
+        mut accept: F,
+    ) -> Option<(NodeId, f32)>
+    where
+        F: FnMut(NodeId) -> bool,
+    {
+        if self.len == 0 || !q.is_finite() {
+            return None;
+        }
+        let (qc, qr) = self.bucket_coords(q);
+        let (qc, qr) = (qc as i32, qr as i32);
+        // Distances to every indexed point are at least the distances from q's projection onto
+        // the grid rectangle (points lie in it and projection onto a convex set does not
+        // increase distances), so ring bounds are computed from the projection.
+        let qp = Point::new(
+            q.x.clamp(0.0, self.cols as f32 * self.side),
+            q.y.clamp(0.0, self.rows as f32 * self.side),
+        );
+        let max_ring = (qc.max(self.cols as i32 - 1 - qc)).max(qr.max(self.rows as i32 - 1 - qr));
+        let mut best: Option<(NodeId, f32)> = None;
+        for k in 0..=max_ring {
+            if let Some((_, d2)) = best {
+                // Everything not yet visited lies outside the square of rings 0..k-1.
+                let s = self.side;
+                let lo_x = (qc - k + 1) as f32 * s;
+                let hi_x = (qc + k) as f32 * s;
+                let lo_y = (qr - k + 1) as f32 * s;
+                let hi_y = (qr + k) as f32 * s;
+                let gap = (qp.x - lo_x)
+                    .min(hi_x - qp.x)
+                    .min(qp.y - lo_y)
+                    .min(hi_y - qp.y);
+                if gap > 0.0 && gap * gap >= d2 {
+                    break;
+                }
+            }
+            let _ = self.for_each_ring_bucket(qc, qr, k, |b| {
+                self.for_each_in_bucket(b, |id| {
+                    if let Some(p) = positions.get(id.index()) {
+                        let d2 = p.dist_sq(q);
+                        if best.is_none_or(|(_, bd)| d2 < bd) && accept(id) {
+                            best = Some((id, d2));
+                        }
+                    }
+                    ControlFlow::Continue(())
+                })
+            });
+        }
+        best
+    }
+
+    /// Calls `f(id, squared distance)` for every indexed node within `radius` of `q` (closed
+    /// disc), stopping early if `f` breaks.
+    pub fn for_each_within<F>(
+        &self,
+        q: Point,
+        radius: f32,
+        positions: &[Point],
+        mut f: F,
+    ) -> ControlFlow<()>
+    where
+        F: FnMut(NodeId, f32) -> ControlFlow<()>,
+    {
+        if !q.is_finite() || radius.is_nan() || radius < 0.0 {
+            return ControlFlow::Continue(());
+        }
+        let r2 = radius * radius;
+        let (c0, r0) = self.bucket_coords(Point::new(q.x - radius, q.y - radius));
+        let (c1, r1) = self.bucket_coords(Point::new(q.x + radius, q.y + radius));
+        for row in r0..=r1 {
+            for col in c0..=c1 {
+                let b = row as usize * self.cols as usize + col as usize;
+                self.for_each_in_bucket(b, |id| match positions.get(id.index()) {
+                    Some(p) => {
+                        let d2 = p.dist_sq(q);
+                        if d2 <= r2 {
+                            f(id, d2)
+                        } else {
+                            ControlFlow::Continue(())
+                        }
+                    }
+                    None => ControlFlow::Continue(()),
+                })?;
+            }
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// Collects into `out` the nodes within `radius` of `q`. Returns the number found, which
+    /// exceeds `out`'s capacity when some did not fit (the first ones found are kept).
+    pub fn within<const K: usize>(
+        &self,
+        q: Point,
+        radius: f32,
+        positions: &[Point],
+        out: &mut heapless::Vec<NodeId, K>,
+    ) -> usize {
+        out.clear();
+        let mut found = 0;
+        let _ = self.for_each_within(q, radius, positions, |id, _| {
+            found += 1;
+            let _ = out.push(id);
+            ControlFlow::Continue(())
+        });
+        found
+    }
+
+    fn bucket_coords(&self, p: Point) -> (u16, u16) {
+        // Saturating float-to-int casts map NaN and negatives to 0; clamp the far side.
+        let c = ((p.x * self.inv_side) as u32).min(self.cols as u32 - 1) as u16;
+        let r = ((p.y * self.inv_side) as u32).min(self.rows as u32 - 1) as u16;
+        (c, r)
+    }
+
+    fn for_each_in_bucket<F>(&self, b: usize, mut f: F) -> ControlFlow<()>
+    where
+        F: FnMut(NodeId) -> ControlFlow<()>,
+    {
+        let mut v = self.head.get(b).copied().unwrap_or(NONE);
+        for _ in 0..N {
+            if v == NONE {
+                break;
+            }
+            f(NodeId(v))?;
+            v = self.next[v as usize];
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// Visits the in-grid buckets at Chebyshev distance exactly `k` from bucket `(qc, qr)`.
+    fn for_each_ring_bucket<F>(&self, qc: i32, qr: i32, k: i32, mut f: F) -> ControlFlow<()>
+    where
+        F: FnMut(usize) -> ControlFlow<()>,
+    {
+        let (cols, rows) = (self.cols as i32, self.rows as i32);
+        let mut visit = |c: i32, r: i32| {
+            if c >= 0 && r >= 0 && c < cols && r < rows {
+                f((r * cols + c) as usize)
+            } else {
+                ControlFlow::Continue(())
+            }
+        };
+        if k == 0 {
+            return visit(qc, qr);
+        }
+        for c in (qc - k)..=(qc + k) {
+            visit(c, qr - k)?;
+            visit(c, qr + k)?;
+        }
+        for r in (qr - k + 1)..=(qr + k - 1) {
+            visit(qc - k, r)?;
+            visit(qc + k, r)?;
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// Brute-force nearest: the oracle for [`SpatialIndex::nearest`]. Ties go to the lowest index.
+pub fn linear_nearest(positions: &[Point], q: Point) -> Option<(NodeId, f32)> {
+    let mut best: Option<(NodeId, f32)> = None;
+    for (i, p) in positions.iter().enumerate() {
+        let d2 = p.dist_sq(q);
+        if best.is_none_or(|(_, bd)| d2 < bd) {
+            best = Some((NodeId(i as u16), d2));
+        }
+    }
+    best
+}
+
+/// Brute-force within-radius: calls `f` for every position within `radius` of `q`, in index
+/// order. The oracle for [`SpatialIndex::for_each_within`].
+pub fn linear_within<F: FnMut(NodeId)>(positions: &[Point], q: Point, radius: f32, mut f: F) {
+    for (i, p) in positions.iter().enumerate() {
+        if p.dist_sq(q) <= radius * radius {
+            f(NodeId(i as u16));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bucket_side_grows_to_fit_the_budget() {
+        let idx = SpatialIndex::<16, 16>::new(100.0, 100.0, 5.0).unwrap();
+        let (c, r) = idx.shape();
+        assert!(c as usize * r as usize <= 16);
+        assert!(idx.bucket_side() >= 25.0);
+        assert!(SpatialIndex::<16, 16>::new(f32::NAN, 1.0, 1.0).is_none());
+    }
+
+    #[test]
+    fn insert_remove_and_query() {
+        let pts = [
+            Point::new(1.0, 1.0),
+            Point::new(9.0, 9.0),
+            Point::new(4.0, 5.0),
+        ];
+        let mut idx = SpatialIndex::<8, 64>::new(10.0, 10.0, 2.0).unwrap();
+        for (i, p) in pts.iter().enumerate() {
+            idx.insert(NodeId(i as u16), *p).unwrap();
+        }
+        assert_eq!(idx.insert(NodeId(0), pts[0]), Err(IndexError::Membership));
+        assert_eq!(idx.insert(NodeId(8), pts[0]), Err(IndexError::IdOutOfRange));
+        assert_eq!(
+            idx.nearest(Point::new(8.0, 8.0), &pts).unwrap().0,
+            NodeId(1)
+        );
+        idx.remove(NodeId(1)).unwrap();
+        assert_eq!(idx.remove(NodeId(1)), Err(IndexError::Membership));
+        assert_eq!(
+            idx.nearest(Point::new(8.0, 8.0), &pts).unwrap().0,
+            NodeId(2)
+        );
+        let mut out = heapless::Vec::<NodeId, 1>::new();
+        assert_eq!(idx.within(Point::new(2.0, 3.0), 10.0, &pts, &mut out), 2);
+        assert_eq!(out.len(), 1);
+        idx.clear();
+        assert!(idx.nearest(Point::new(8.0, 8.0), &pts).is_none());
+    }
+}

@@ -1,0 +1,594 @@
+//! The world the planner moves in: a borrowed occupancy grid plus a bounded set of dynamic
+//! circular obstacles, and the collision test `free_path` (paper, section 3).
+//!
+//! # Occupancy grid
+//!
+//! [`OccupancyGrid`] borrows a bit-packed byte slice: cell `(col, row)` is bit
+//! `i = row * width + col`, stored in byte `i / 8` at bit `i % 8` (least significant bit first);
+//! a set bit is an obstacle. Position `(x, y)` in metres lies in cell
+//! `(floor(x / cell), floor(y / cell))`; the map spans `[0, width * cell] x [0, height * cell]`.
+//! The grid only borrows its bytes and its constructor is a `const fn`, so firmware can keep the
+//! whole map in flash:
+//!
+//! ```
+//! use bi_am_rrt::map::OccupancyGrid;
+//! static BITS: [u8; 2] = [0b0000_0000, 0b0000_0001]; // 4 x 4 cells, only (0, 2) occupied
+//! static GRID: OccupancyGrid<'static> = match OccupancyGrid::new(&BITS, 4, 4, 1.0) {
+//!     Ok(g) => g,
+//!     Err(_) => panic!("bad grid"), // evaluated at compile time
+//! };
+//! assert!(GRID.is_occupied(0, 2));
+//! assert!(!GRID.is_occupied(1, 2));
+//! ```
+//!
+//! # What `free_path` means
+//!
+//! A segment is free when both ends lie inside the map and no occupied cell lies within
+//! [`CONTACT_MARGIN`] (a thousandth of a cell, in the max-norm) of any of its points. Cells are
+//! therefore closed squares with a hair of margin: a segment that grazes an occupied cell's edge,
+//! or slips diagonally through the corner shared by two occupied cells, is blocked, and float
+//! rounding can never let a segment through a corner that it mathematically touches. The test is
+//! an exact traversal, row by row, of every cell the (slightly thickened) segment touches; its
+//! cost grows with the number of rows and the number of cells crossed, never with the map's size.
+//!
+//! A dynamic obstacle is a closed disc: a segment is blocked by it when the distance from the
+//! centre to the *segment* (not the infinite line) is at most the radius.
+
+use core::ops::ControlFlow;
+
+use crate::error::{InputError, MapError, ObstacleError};
+use crate::geometry::{Point, segment_point_dist_sq};
+
+/// Safety margin of the grid collision test, in cells (see the module documentation).
+pub const CONTACT_MARGIN: f32 = 1.0e-3;
+
+/// A read-only occupancy grid borrowing its bit-packed cells.
+#[derive(Clone, Copy, Debug)]
+pub struct OccupancyGrid<'a> {
+    bits: &'a [u8],
+    width: u16,
+    height: u16,
+    cell: f32,
+    inv_cell: f32,
+}
+
+impl<'a> OccupancyGrid<'a> {
+    /// Bytes needed to hold `width * height` cells at one bit each.
+    pub const fn bytes_needed(width: u16, height: u16) -> usize {
+        (width as usize * height as usize).div_ceil(8)
+    }
+
+    /// A grid of `width x height` cells of side `cell_size` metres over `bits` (layout in the
+    /// module documentation). Extra bytes beyond [`Self::bytes_needed`] are ignored.
+    pub const fn new(
+        bits: &'a [u8],
+        width: u16,
+        height: u16,
+        cell_size: f32,
+    ) -> Result<Self, MapError> {
+        if width == 0 || height == 0 {
+            return Err(MapError::EmptyGrid);
+        }
+        if !(cell_size.is_finite() && cell_size > 0.0) {
+            return Err(MapError::BadCellSize);
+        }
+        if bits.len() < Self::bytes_needed(width, height) {
+            return Err(MapError::BufferTooShort);
+        }
+        Ok(Self {
+            bits,
+            width,
+            height,
+            cell: cell_size,
+            inv_cell: 1.0 / cell_size,
+        })
+    }
+
+    /// Width in cells.
+    pub const fn cols(&self) -> u16 {
+        self.width
+    }
+
+    /// Height in cells.
+    pub const fn rows(&self) -> u16 {
+        self.height
+    }
+
+    /// Side of a cell in metres.
+    pub const fn cell_size(&self) -> f32 {
+        self.cell
+    }
+
+    /// Width of the map in metres.
+    pub fn width_m(&self) -> f32 {
+        self.width as f32 * self.cell
+    }
+
+    /// Height of the map in metres.
+    pub fn height_m(&self) -> f32 {
+        self.height as f32 * self.cell
+    }
+
+    /// The borrowed bit-packed cells.
+    pub const fn bits(&self) -> &'a [u8] {
+        self.bits
+    }
+
+    /// Whether cell `(col, row)` is occupied. Cells outside the grid count as occupied.
+    #[inline]
+    pub fn is_occupied(&self, col: u16, row: u16) -> bool {
+        if col >= self.width || row >= self.height {
+            return true;
+        }
+        let i = row as usize * self.width as usize + col as usize;
+        self.bits.get(i / 8).is_none_or(|b| b & (1 << (i % 8)) != 0)
+    }
+
+    /// Whether `p` is finite and inside the map's closed bounds.
+    #[inline]
+    pub fn contains(&self, p: Point) -> bool {
+        // NaN fails every comparison, so it is rejected here too.
+        p.x >= 0.0 && p.y >= 0.0 && p.x <= self.width_m() && p.y <= self.height_m()
+    }
+
+    /// The cell containing `p` (a point on the far edge belongs to the last cell), or `None`
+    /// outside the map.
+    pub fn cell_of(&self, p: Point) -> Option<(u16, u16)> {
+        if !self.contains(p) {
+            return None;
+        }
+        let col = ((p.x * self.inv_cell) as u32).min(self.width as u32 - 1) as u16;
+        let row = ((p.y * self.inv_cell) as u32).min(self.height as u32 - 1) as u16;
+        Some((col, row))
+    }
+
+    /// The centre of cell `(col, row)` in metres.
+    pub fn cell_center(&self, col: u16, row: u16) -> Point {
+        Point::new(
+            (col as f32 + 0.5) * self.cell,
+            (row as f32 + 0.5) * self.cell,
+        )
+    }
+
+    /// Whether `p` lies in the map and no occupied cell is within the contact margin of it.
+    pub fn point_free(&self, p: Point) -> bool {
+        self.segment_free(p, p)
+    }
+
+    /// Whether segment `a-b` lies in the map and touches no occupied cell (module docs).
+    pub fn segment_free(&self, a: Point, b: Point) -> bool {
+        if !self.contains(a) || !self.contains(b) {
+            return false;
+        }
+        self.for_each_span(a, b, |row, c0, c1| {
+            if self.span_free(row, c0, c1) {
+                ControlFlow::Continue(())
+            } else {
+                ControlFlow::Break(())
+            }
+        })
+        .is_continue()
+    }
+
+    /// Calls `f(col, row)` for every grid cell the segment `a-b` touches (within the contact
+    /// margin), row by row; stops early when `f` breaks. Ends outside the map are allowed: only
+    /// cells of the grid are visited.
+    pub fn for_each_cell<F>(&self, a: Point, b: Point, mut f: F) -> ControlFlow<()>
+    where
+        F: FnMut(u16, u16) -> ControlFlow<()>,
+    {
+        self.for_each_span(a, b, |row, c0, c1| {
+            for col in c0..=c1 {
+                f(col, row)?;
+            }
+            ControlFlow::Continue(())
+        })
+    }
+
+    /// The traversal: for each grid row the segment (thickened by the contact margin) crosses,
+    /// the contiguous run of columns `c0..=c1` it touches in that row.
+    fn for_each_span<F>(&self, a: Point, b: Point, mut f: F) -> ControlFlow<()>
+    where
+        F: FnMut(u16, u16, u16) -> ControlFlow<()>,
+    {
+        const M: f32 = CONTACT_MARGIN;
+        if !a.is_finite() || !b.is_finite() {
+            return ControlFlow::Break(());
+        }
+        // Work in cell units with y increasing from a to b.
+        let (mut p, mut q) = (a * self.inv_cell, b * self.inv_cell);
+        if p.y > q.y {
+            core::mem::swap(&mut p, &mut q);
+        }
+        let (dx, dy) = (q.x - p.x, q.y - p.y);
+        // Cell indices: values below zero truncate to 0 like a clamped floor; the far side is
+        // clamped to the last row or column.
+        let (max_row, max_col) = (self.height as u32 - 1, self.width as u32 - 1);
+        let index = |v: f32, max: u32| ((v.max(0.0)) as u32).min(max) as u16;
+        if q.y + M < 0.0 || p.y - M > self.height as f32 {
+            return ControlFlow::Continue(());
+        }
+        let (row_lo, row_hi) = (index(p.y - M, max_row), index(q.y + M, max_row));
+        // x as a function of y is only used when the segment is not (nearly) horizontal, where
+        // the ratio is well conditioned; a flat segment spans its whole x-range in every row.
+        let steep = dy > M;
+        let slope = if steep { dx / dy } else { 0.0 };
+        for row in row_lo..=row_hi {
+            let (x0, x1) = if steep {
+                let y0 = p.y.max(row as f32 - M);
+                let y1 = q.y.min(row as f32 + 1.0 + M);
+                (p.x + (y0 - p.y) * slope, p.x + (y1 - p.y) * slope)
+            } else {
+                (p.x, q.x)
+            };
+            let (lo, hi) = (x0.min(x1) - M, x0.max(x1) + M);
+            if hi < 0.0 || lo > self.width as f32 {
+                continue;
+            }
+            f(row, index(lo, max_col), index(hi, max_col))?;
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// Whether cells `c0..=c1` of `row` are all free (a bit-range test, a byte at a time).
+    fn span_free(&self, row: u16, c0: u16, c1: u16) -> bool {
+        let base = row as usize * self.width as usize;
+        let (i0, i1) = (base + c0 as usize, base + c1 as usize);
+        let (b0, b1) = (i0 / 8, i1 / 8);
+        let lo_mask = 0xffu8 << (i0 % 8);
+        let hi_mask = 0xffu8 >> (7 - i1 % 8);
+        let Some(bytes) = self.bits.get(b0..=b1) else {
+            return false;
+        };
+        match bytes {
+            [one] => one & lo_mask & hi_mask == 0,
+            [first, middle @ .., last] => {
+                first & lo_mask == 0 && last & hi_mask == 0 && middle.iter().all(|&b| b == 0)
+            }
+            [] => false,
+        }
+    }
+}
+
+/// Fills `bits` (layout in the module docs) from `occupied(col, row)`, e.g. when building a grid
+/// on the host or in a test. Bytes beyond the grid are left as they are.
+pub fn pack_grid<F>(
+    bits: &mut [u8],
+    width: u16,
+    height: u16,
+    mut occupied: F,
+) -> Result<(), MapError>
+where
+    F: FnMut(u16, u16) -> bool,
+{
+    if width == 0 || height == 0 {
+        return Err(MapError::EmptyGrid);
+    }
+    let n = OccupancyGrid::bytes_needed(width, height);
+    let Some(bits) = bits.get_mut(..n) else {
+        return Err(MapError::BufferTooShort);
+    };
+    bits.fill(0);
+    for row in 0..height {
+        for col in 0..width {
+            if occupied(col, row) {
+                let i = row as usize * width as usize + col as usize;
+                if let Some(b) = bits.get_mut(i / 8) {
+                    *b |= 1 << (i % 8);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A closed disc: a dynamic obstacle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Circle {
+    /// Centre in metres.
+    pub center: Point,
+    /// Radius in metres.
+    pub radius: f32,
+}
+
+impl Circle {
+    /// A disc of `radius` around `center`.
+    pub const fn new(center: Point, radius: f32) -> Self {
+        Self { center, radius }
+    }
+
+    /// Whether `p` lies in the closed disc.
+    pub fn contains(&self, p: Point) -> bool {
+        p.dist_sq(self.center) <= self.radius * self.radius
+    }
+
+    /// Whether the closed segment `a-b` meets the closed disc (distance from the centre to the
+    /// segment at most the radius).
+    pub fn intersects_segment(&self, a: Point, b: Point) -> bool {
+        segment_point_dist_sq(a, b, self.center) <= self.radius * self.radius
+    }
+
+    fn is_valid(&self) -> bool {
+        self.center.is_finite() && self.radius.is_finite() && self.radius > 0.0
+    }
+}
+
+/// Identifies a dynamic obstacle for its removal. Ids are not reused until 2^32 further
+/// additions have been made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ObstacleId(pub u32);
+
+/// A bounded set of at most `K` dynamic circular obstacles.
+#[derive(Clone, Debug)]
+pub struct Obstacles<const K: usize> {
+    items: heapless::Vec<(ObstacleId, Circle), K>,
+    next_id: u32,
+}
+
+impl<const K: usize> Default for Obstacles<K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const K: usize> Obstacles<K> {
+    /// An empty set.
+    pub const fn new() -> Self {
+        Self {
+            items: heapless::Vec::new(),
+            next_id: 0,
+        }
+    }
+
+    /// Adds a circle and returns its id; `Err(Full)` when `K` circles are present,
+    /// `Err(BadCircle)` for a non-finite centre or a radius that is not finite and positive.
+    pub fn add(&mut self, circle: Circle) -> Result<ObstacleId, ObstacleError> {
+        if !circle.is_valid() {
+            return Err(ObstacleError::BadCircle);
+        }
+        if self.items.is_full() {
+            return Err(ObstacleError::Full);
+        }
+        // Skip ids still in use after a wrap-around (at most K of them).
+        let mut id = ObstacleId(self.next_id);
+        while self.get(id).is_some() {
+            id = ObstacleId(id.0.wrapping_add(1));
+        }
+        self.next_id = id.0.wrapping_add(1);
+        self.items
+            .push((id, circle))
+            .map_err(|_| ObstacleError::Full)?;
+        Ok(id)
+    }
+
+    /// Removes the circle with this id and returns it.
+    pub fn remove(&mut self, id: ObstacleId) -> Result<Circle, ObstacleError> {
+        let pos = self
+            .items
+            .iter()
+            .position(|(i, _)| *i == id)
+            .ok_or(ObstacleError::UnknownId)?;
+        Ok(self.items.swap_remove(pos).1)
+    }
+
+    /// The circle with this id.
+    pub fn get(&self, id: ObstacleId) -> Option<Circle> {
+        self.items.iter().find(|(i, _)| *i == id).map(|(_, c)| *c)
+    }
+
+    /// The circles present with their ids, in no particular order.
+    pub fn iter(&self) -> impl Iterator<Item = (ObstacleId, Circle)> + '_ {
+        self.items.iter().copied()
+    }
+
+    /// Number of circles present.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether no circle is present.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// Removes every circle.
+    pub fn clear(&mut self) {
+        self.items.clear();
+    }
+
+    /// Whether any circle meets the segment `a-b`.
+    pub fn blocks_segment(&self, a: Point, b: Point) -> bool {
+        self.items.iter().any(|(_, c)| c.intersects_segment(a, b))
+    }
+
+    /// Whether any circle contains `p`.
+    pub fn contains(&self, p: Point) -> bool {
+        self.items.iter().any(|(_, c)| c.contains(p))
+    }
+}
+
+/// The planner's world: a borrowed static grid and up to `K` dynamic circles.
+#[derive(Clone, Debug)]
+pub struct Map<'a, const K: usize> {
+    grid: OccupancyGrid<'a>,
+    obstacles: Obstacles<K>,
+}
+
+impl<'a, const K: usize> Map<'a, K> {
+    /// A world with this grid and no dynamic obstacle.
+    pub const fn new(grid: OccupancyGrid<'a>) -> Self {
+        Self {
+            grid,
+            obstacles: Obstacles::new(),
+        }
+    }
+
+    /// The static occupancy grid.
+    pub const fn grid(&self) -> &OccupancyGrid<'a> {
+        &self.grid
+    }
+
+    /// The dynamic obstacles.
+    pub const fn obstacles(&self) -> &Obstacles<K> {
+        &self.obstacles
+    }
+
+    /// The dynamic obstacles, mutably (adding one does not update any tree by itself: the
+    /// planner's own `add_obstacle` does that).
+    pub fn obstacles_mut(&mut self) -> &mut Obstacles<K> {
+        &mut self.obstacles
+    }
+
+    /// `free_path(a, b)` of the paper: the segment is inside the map, touches no occupied cell
+    /// and meets no dynamic circle.
+    pub fn free_path(&self, a: Point, b: Point) -> bool {
+        self.grid.segment_free(a, b) && !self.obstacles.blocks_segment(a, b)
+    }
+
+    /// Whether a single position is free (the degenerate segment `p-p`).
+    pub fn free_point(&self, p: Point) -> bool {
+        self.free_path(p, p)
+    }
+
+    /// Validates a position given at the API edge: finite, inside the map, not in an obstacle.
+    pub fn check_point(&self, p: Point) -> Result<(), InputError> {
+        if !p.is_finite() {
+            Err(InputError::NotFinite)
+        } else if !self.grid.contains(p) {
+            Err(InputError::OutOfBounds)
+        } else if !self.free_point(p) {
+            Err(InputError::InObstacle)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid_with<'a>(buf: &'a mut [u8], w: u16, h: u16, occ: &[(u16, u16)]) -> OccupancyGrid<'a> {
+        pack_grid(buf, w, h, |c, r| occ.contains(&(c, r))).unwrap();
+        OccupancyGrid::new(buf, w, h, 1.0).unwrap()
+    }
+
+    #[test]
+    fn constructor_rejects_bad_grids() {
+        let buf = [0u8; 2];
+        assert_eq!(
+            OccupancyGrid::new(&buf, 0, 4, 1.0).unwrap_err(),
+            MapError::EmptyGrid
+        );
+        assert_eq!(
+            OccupancyGrid::new(&buf, 5, 4, 1.0).unwrap_err(),
+            MapError::BufferTooShort
+        );
+        assert_eq!(
+            OccupancyGrid::new(&buf, 4, 4, 0.0).unwrap_err(),
+            MapError::BadCellSize
+        );
+        assert_eq!(
+            OccupancyGrid::new(&buf, 4, 4, f32::NAN).unwrap_err(),
+            MapError::BadCellSize
+        );
+        assert!(OccupancyGrid::new(&buf, 4, 4, 0.5).is_ok());
+    }
+
+    #[test]
+    fn diagonal_through_a_shared_corner_is_blocked() {
+        let mut buf = [0u8; 2];
+        // Occupied (1, 0) and (0, 1) share the corner (1, 1).
+        let g = grid_with(&mut buf, 4, 4, &[(1, 0), (0, 1)]);
+        assert!(!g.segment_free(Point::new(0.5, 0.5), Point::new(1.5, 1.5)));
+        // The other diagonal through the same corner also touches both cells.
+        assert!(!g.segment_free(Point::new(0.5, 1.5), Point::new(1.5, 0.5)));
+        // A segment that stays clear of both is free.
+        assert!(g.segment_free(Point::new(2.5, 0.5), Point::new(3.5, 3.5)));
+    }
+
+    #[test]
+    fn grazing_an_edge_counts_as_touching() {
+        let mut buf = [0u8; 2];
+        let g = grid_with(&mut buf, 4, 4, &[(1, 1)]);
+        // Along the top edge of cell (1, 1) (the line y = 1).
+        assert!(!g.segment_free(Point::new(0.2, 1.0), Point::new(3.8, 1.0)));
+        // Just clear of it.
+        assert!(g.segment_free(Point::new(0.2, 0.99), Point::new(3.8, 0.99)));
+        // Vertical along x = 2 touches the right edge of (1, 1).
+        assert!(!g.segment_free(Point::new(2.0, 0.5), Point::new(2.0, 3.5)));
+        assert!(g.segment_free(Point::new(2.01, 0.5), Point::new(2.01, 3.5)));
+    }
+
+    #[test]
+    fn bounds_and_nan_are_not_free() {
+        let mut buf = [0u8; 2];
+        let g = grid_with(&mut buf, 4, 4, &[]);
+        assert!(g.segment_free(Point::new(0.0, 0.0), Point::new(4.0, 4.0)));
+        assert!(!g.segment_free(Point::new(0.5, 0.5), Point::new(4.5, 0.5)));
+        assert!(!g.segment_free(Point::new(f32::NAN, 0.5), Point::new(1.0, 0.5)));
+        assert!(!g.point_free(Point::new(-0.001, 1.0)));
+        assert_eq!(g.cell_of(Point::new(4.0, 4.0)), Some((3, 3)));
+    }
+
+    #[test]
+    fn circle_uses_the_segment_distance() {
+        let c = Circle::new(Point::new(5.0, 0.0), 1.0);
+        // The infinite line through the segment passes through the centre; the segment does not.
+        assert!(!c.intersects_segment(Point::new(0.0, 0.0), Point::new(3.9, 0.0)));
+        assert!(c.intersects_segment(Point::new(0.0, 0.0), Point::new(4.0, 0.0)));
+        assert!(c.intersects_segment(Point::new(4.0, -3.0), Point::new(4.0, 3.0)));
+        assert!(!c.intersects_segment(Point::new(3.9, -3.0), Point::new(3.9, 3.0)));
+    }
+
+    #[test]
+    fn obstacle_set_is_bounded_and_ids_are_stable() {
+        let mut o = Obstacles::<2>::new();
+        let a = o.add(Circle::new(Point::new(1.0, 1.0), 0.5)).unwrap();
+        let b = o.add(Circle::new(Point::new(2.0, 1.0), 0.5)).unwrap();
+        assert_ne!(a, b);
+        assert_eq!(
+            o.add(Circle::new(Point::new(3.0, 1.0), 0.5)),
+            Err(ObstacleError::Full)
+        );
+        assert_eq!(
+            o.add(Circle::new(Point::new(3.0, 1.0), -1.0)),
+            Err(ObstacleError::BadCircle)
+        );
+        assert_eq!(o.remove(a).unwrap().center, Point::new(1.0, 1.0));
+        assert_eq!(o.remove(a), Err(ObstacleError::UnknownId));
+        let c = o.add(Circle::new(Point::new(3.0, 1.0), 0.5)).unwrap();
+        assert!(c != a && c != b);
+        assert_eq!(o.get(b).unwrap().center, Point::new(2.0, 1.0));
+        assert_eq!(o.len(), 2);
+    }
+
+    #[test]
+    fn map_checks_points_at_the_edge() {
+        let mut buf = [0u8; 2];
+        let mut m = Map::<'_, 4>::new(grid_with(&mut buf, 4, 4, &[(3, 3)]));
+        assert_eq!(
+            m.check_point(Point::new(f32::NAN, 1.0)),
+            Err(InputError::NotFinite)
+        );
+        assert_eq!(
+            m.check_point(Point::new(5.0, 1.0)),
+            Err(InputError::OutOfBounds)
+        );
+        assert_eq!(
+            m.check_point(Point::new(3.5, 3.5)),
+            Err(InputError::InObstacle)
+        );
+        assert_eq!(m.check_point(Point::new(1.5, 1.5)), Ok(()));
+        m.obstacles_mut()
+            .add(Circle::new(Point::new(1.5, 1.5), 0.2))
+            .unwrap();
+        assert_eq!(
+            m.check_point(Point::new(1.5, 1.5)),
+            Err(InputError::InObstacle)
+        );
+        assert!(!m.free_path(Point::new(0.5, 1.5), Point::new(2.5, 1.5)));
+    }
+}

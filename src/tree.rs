@@ -1,0 +1,698 @@
+//! The tree arena: a fixed-capacity RRT* tree with cached costs (paper, section 3: `Cost`,
+//! `UpdateEdge`, `SetRoot`).
+//!
+//! Nodes live in parallel arrays of capacity `N` (struct of arrays), addressed by [`NodeId`], a
+//! `u16` newtype. Parent, first-child and sibling links are ids too, so the children of a node
+//! form an intrusive doubly linked list and no node owns a vector. Every node caches its
+//! [`Cost`]: the Euclidean length of the tree path from the root, and whether any edge of that
+//! path crosses a dynamic obstacle (the edge's *blocked* flag). The caches stay exact: changing
+//! an edge recomputes the costs of the moved subtree (a preorder walk along the links, with no
+//! stack), and re-rooting reverses the edges on the old-root-to-new-root path and recomputes all
+//! costs. A cost is always recomputed the same way (`parent cost + |parent - node|`), so cached
+//! and freshly recomputed costs agree to the bit.
+//!
+//! Resetting is O(1) (the node count drops to zero); nothing is reallocated. An operation that
+//! fails returns an error and leaves the tree exactly as it was.
+
+use core::cmp::Ordering;
+
+use crate::error::TreeError;
+use crate::geometry::Point;
+
+const NONE: u16 = u16::MAX;
+
+/// Identifies a node of one [`Tree`]. Ids are dense (`0..len`) and stay valid until the tree
+/// is reset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NodeId(pub u16);
+
+impl NodeId {
+    /// The id as an array index.
+    #[inline]
+    pub const fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// The cost of reaching a node from the root: path length plus a *blocked* flag. Costs compare
+/// blocked-last: every unblocked cost is smaller than every blocked one, and costs with the same
+/// flag compare by length (`f32::total_cmp`, so the order is total).
+#[derive(Clone, Copy, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Cost {
+    /// Euclidean length of the path from the root, in metres.
+    pub length: f32,
+    /// Some edge of the path crosses a dynamic obstacle.
+    pub blocked: bool,
+}
+
+impl Cost {
+    /// The root's cost.
+    pub const ZERO: Cost = Cost {
+        length: 0.0,
+        blocked: false,
+    };
+
+    /// The cost after one more edge of length `len` whose own blocked flag is `blocked`.
+    #[inline]
+    pub fn extend(self, len: f32, blocked: bool) -> Cost {
+        Cost {
+            length: self.length + len,
+            blocked: self.blocked || blocked,
+        }
+    }
+}
+
+impl Ord for Cost {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.blocked
+            .cmp(&o.blocked)
+            .then(self.length.total_cmp(&o.length))
+    }
+}
+
+impl PartialOrd for Cost {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl PartialEq for Cost {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+
+impl Eq for Cost {}
+
+/// A broken invariant found by [`Tree::validate`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Invariant {
+    /// The root has a parent, or a non-root node has none.
+    RootParent(NodeId),
+    /// A link (parent, child or sibling) points outside `0..len`.
+    DanglingLink(NodeId),
+    /// A node's parent does not list it among its children, or a child list is inconsistent.
+    ChildList(NodeId),
+    /// Following parents from this node does not reach the root within `len` steps.
+    NotConnected(NodeId),
+    /// The cached cost differs from the recomputed one.
+    StaleCost(NodeId),
+}
+
+/// A tree of at most `N` nodes (`N < 65,535`) with cached path costs. See the module docs.
+#[derive(Clone, Debug)]
+pub struct Tree<const N: usize> {
+    pos: [Point; N],
+    cost: [f32; N],
+    parent: [u16; N],
+    first_child: [u16; N],
+    next_sibling: [u16; N],
+    prev_sibling: [u16; N],
+    /// Bit 0: the edge from the parent is blocked. Bit 1: the cached path is blocked.
+    flags: [u8; N],
+    len: u16,
+    root: u16,
+}
+
+const EDGE_BLOCKED: u8 = 1;
+const PATH_BLOCKED: u8 = 2;
+
+impl<const N: usize> Default for Tree<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Tree<N> {
+    const CAPACITY_FITS: () = assert!(N > 0 && N < NONE as usize, "Tree capacity must be 1..65535");
+
+    /// An empty tree (no root yet; see [`Tree::reset`]). A `const fn`, so a tree can be a
+    /// `static`.
+    pub const fn new() -> Self {
+        let () = Self::CAPACITY_FITS;
+        Self {
+            pos: [Point::ZERO; N],
+            cost: [0.0; N],
+            parent: [NONE; N],
+            first_child: [NONE; N],
+            next_sibling: [NONE; N],
+            prev_sibling: [NONE; N],
+            flags: [0; N],
+            len: 0,
+            root: 0,
+        }
+    }
+
+    /// The capacity `N`.
+    pub const fn capacity(&self) -> usize {
+        N
+    }
+
+    /// Number of nodes.
+    pub const fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    /// Whether the tree has no node (not even a root).
+    pub const fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether no node can be added.
+    pub const fn is_full(&self) -> bool {
+        self.len as usize >= N
+    }
+
+    /// Whether `id` names a node of this tree.
+    #[inline]
+    pub const fn contains(&self, id: NodeId) -> bool {
+        id.0 < self.len
+    }
+
+    /// Removes every node and makes a single root at `pos`: O(1).
+    pub fn reset(&mut self, pos: Point) -> NodeId {
+        self.len = 1;
+        self.root = 0;
+        self.init_node(0, pos, NONE);
+        self.cost[0] = 0.0;
+        self.flags[0] = 0;
+        NodeId(0)
+    }
+
+    /// Removes every node, the root included: O(1).
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.root = 0;
+    }
+
+    /// The root, `None` for an empty tree.
+    pub const fn root(&self) -> Option<NodeId> {
+        if self.len == 0 {
+            None
+        } else {
+            Some(NodeId(self.root))
+        }
+    }
+
+    /// All node ids, `0..len`.
+    pub fn ids(&self) -> impl DoubleEndedIterator<Item = NodeId> + ExactSizeIterator + use<N> {
+        (0..self.len).map(NodeId)
+    }
+
+    /// The positions of all nodes, indexed by [`NodeId::index`] (what the spatial index reads).
+    pub fn positions(&self) -> &[Point] {
+        &self.pos[..self.len as usize]
+    }
+
+    /// Position of a node.
+    #[inline]
+    pub fn position(&self, id: NodeId) -> Option<Point> {
+        self.positions().get(id.index()).copied()
+    }
+
+    /// Cached cost of a node.
+    #[inline]
+    pub fn cost(&self, id: NodeId) -> Option<Cost> {
+        self.contains(id).then(|| self.cost_of(id.0))
+    }
+
+    /// Parent of a node (`None` for the root or an unknown id).
+    #[inline]
+    pub fn parent(&self, id: NodeId) -> Option<NodeId> {
+        if !self.contains(id) {
+            return None;
+        }
+        let p = self.parent[id.index()];
+        (p != NONE).then_some(NodeId(p))
+    }
+
+    /// Whether the edge from the node's parent is marked as crossing a dynamic obstacle.
+    pub fn edge_blocked(&self, id: NodeId) -> Option<bool> {
+        self.contains(id)
+            .then(|| self.flags[id.index()] & EDGE_BLOCKED != 0)
+    }
+
+    /// The children of a node, most recently attached first.
+    pub fn children(&self, id: NodeId) -> Children<'_, N> {
+        let first = if self.contains(id) {
+            self.first_child[id.index()]
+        } else {
+            NONE
+        };
+        Children {
+            tree: self,
+            next: first,
+        }
+    }
+
+    /// Whether `node` lies in the subtree of `top` (a node is in its own subtree). Walks up from
+    /// `node`: O(depth).
+    pub fn in_subtree(&self, node: NodeId, top: NodeId) -> bool {
+        if !self.contains(node) || !self.contains(top) {
+            return false;
+        }
+        let mut v = node.0;
+        for _ in 0..=self.len {
+            if v == top.0 {
+                return true;
+            }
+            if v == NONE {
+                return false;
+            }
+            v = self.parent[v as usize];
+        }
+        false
+    }
+
+    /// Adds a node at `pos` as a child of `parent`; `edge_blocked` marks the new edge as
+    /// crossing a dynamic obstacle. `Err(Full)` when the arena is full.
+    pub fn add(
+        &mut self,
+        pos: Point,
+        parent: NodeId,
+        edge_blocked: bool,
+    ) -> Result<NodeId, TreeError> {
+        if !self.contains(parent) {
+            return Err(TreeError::UnknownNode);
+        }
+        if self.is_full() {
+            return Err(TreeError::Full);
+        }
+        let id = self.len;
+        self.len += 1;
+        self.init_node(id, pos, NONE);
+        self.link(id, parent.0);
+        self.flags[id as usize] = if edge_blocked { EDGE_BLOCKED } else { 0 };
+        self.refresh_cost(id);
+        Ok(NodeId(id))
+    }
+
+    /// `UpdateEdge`: makes `parent` the parent of `child` with an edge whose blocked flag is
+    /// `edge_blocked`, and updates the cached costs of the whole moved subtree.
+    /// `Err(WouldCycle)` when `parent` lies in `child`'s subtree (which includes `child == root`).
+    pub fn set_parent(
+        &mut self,
+        child: NodeId,
+        parent: NodeId,
+        edge_blocked: bool,
+    ) -> Result<(), TreeError> {
+        if !self.contains(child) || !self.contains(parent) {
+            return Err(TreeError::UnknownNode);
+        }
+        if self.in_subtree(parent, child) {
+            return Err(TreeError::WouldCycle);
+        }
+        let c = child.0;
+        self.unlink(c);
+        self.link(c, parent.0);
+        self.set_flag(c, EDGE_BLOCKED, edge_blocked);
+        self.refresh_subtree(c);
+        Ok(())
+    }
+
+    /// Sets the blocked flag of the edge from `child`'s parent and updates the subtree's costs.
+    pub fn set_edge_blocked(&mut self, child: NodeId, blocked: bool) -> Result<(), TreeError> {
+        if !self.contains(child) {
+            return Err(TreeError::UnknownNode);
+        }
+        if self.parent[child.index()] != NONE {
+            self.set_flag(child.0, EDGE_BLOCKED, blocked);
+            self.refresh_subtree(child.0);
+        }
+        Ok(())
+    }
+
+    /// Sets every edge's blocked flag from `blocked(parent position, child position)` and then
+    /// recomputes every cost: O(N) calls. Used when dynamic obstacles appear or disappear.
+    pub fn reflag_edges<F>(&mut self, mut blocked: F)
+    where
+        F: FnMut(Point, Point) -> bool,
+    {
+        for v in 0..self.len {
+            let p = self.parent[v as usize];
+            let b = p != NONE && blocked(self.pos[p as usize], self.pos[v as usize]);
+            self.set_flag(v, EDGE_BLOCKED, b);
+        }
+        self.refresh_subtree(self.root);
+    }
+
+    /// `SetRoot`: re-roots the tree at `new_root` by reversing the edges on the path from the
+    /// old root (each edge keeps its blocked flag), then recomputes every cost: O(depth + N).
+    pub fn set_root(&mut self, new_root: NodeId) -> Result<(), TreeError> {
+        if !self.contains(new_root) {
+            return Err(TreeError::UnknownNode);
+        }
+        let mut prev = NONE;
+        let mut prev_flag = false;
+        let mut cur = new_root.0;
+        for _ in 0..self.len {
+            if cur == NONE {
+                break;
+            }
+            let next = self.parent[cur as usize];
+            let flag = self.flags[cur as usize] & EDGE_BLOCKED != 0;
+            self.unlink(cur);
+            if prev != NONE {
+                self.link(cur, prev);
+            }
+            // The edge between `prev` and `cur` now hangs below `prev`; it keeps its flag,
+            // which was stored at `prev` while `cur` was its parent.
+            self.set_flag(cur, EDGE_BLOCKED, prev_flag);
+            prev_flag = flag;
+            prev = cur;
+            cur = next;
+        }
+        self.root = new_root.0;
+        self.refresh_subtree(self.root);
+        Ok(())
+    }
+
+    /// Writes the path from the root to `to` (both included, root first) into `buf` and returns
+    /// its number of nodes. `Err(BufferTooSmall)` leaves `buf`'s contents unspecified.
+    pub fn path_ids(&self, to: NodeId, buf: &mut [NodeId]) -> Result<usize, TreeError> {
+        if !self.contains(to) {
+            return Err(TreeError::UnknownNode);
+        }
+        let mut n = 0;
+        let mut v = to.0;
+        while v != NONE {
+            let slot = buf.get_mut(n).ok_or(TreeError::BufferTooSmall)?;
+            *slot = NodeId(v);
+            n += 1;
+            if n > self.len as usize {
+                // Only a corrupted tree could get here; refuse rather than loop.
+                return Err(TreeError::WouldCycle);
+            }
+            v = self.parent[v as usize];
+        }
+        buf[..n].reverse();
+        Ok(n)
+    }
+
+    /// Like [`Tree::path_ids`], writing positions.
+    pub fn path_points(&self, to: NodeId, buf: &mut [Point]) -> Result<usize, TreeError> {
+        if !self.contains(to) {
+            return Err(TreeError::UnknownNode);
+        }
+        let mut n = 0;
+        let mut v = to.0;
+        while v != NONE {
+            let slot = buf.get_mut(n).ok_or(TreeError::BufferTooSmall)?;
+            *slot = self.pos[v as usize];
+            n += 1;
+            if n > self.len as usize {
+                return Err(TreeError::WouldCycle);
+            }
+            v = self.parent[v as usize];
+        }
+        buf[..n].reverse();
+        Ok(n)
+    }
+
+    /// Checks every structural invariant (O(N * depth)): the root has no parent and every
+    /// other node has one; links stay in range; parent and child lists agree; every node
+    /// reaches the root (so there is no cycle); cached costs equal recomputed costs.
+    pub fn validate(&self) -> Result<(), Invariant> {
+        let n = self.len;
+        if n == 0 {
+            return Ok(());
+        }
+        let ok = |v: u16| v == NONE || v < n;
+        for v in 0..n {
+            let i = v as usize;
+            let id = NodeId(v);
+            let links = [
+                self.parent[i],
+                self.first_child[i],
+                self.next_sibling[i],
+                self.prev_sibling[i],
+            ];
+            if !links.iter().all(|&l| ok(l)) {
+                return Err(Invariant::DanglingLink(id));
+            }
+            if (v == self.root) != (self.parent[i] == NONE) {
+                return Err(Invariant::RootParent(id));
+            }
+            // Reaches the root within n steps.
+            if !self.in_subtree(id, NodeId(self.root)) {
+                return Err(Invariant::NotConnected(id));
+            }
+            // Every child lists this node as parent, and the back links agree.
+            let mut prev = NONE;
+            let mut c = self.first_child[i];
+            let mut count = 0u16;
+            while c != NONE {
+                count += 1;
+                if count > n
+                    || self.parent[c as usize] != v
+                    || self.prev_sibling[c as usize] != prev
+                {
+                    return Err(Invariant::ChildList(id));
+                }
+                prev = c;
+                c = self.next_sibling[c as usize];
+            }
+            // And this node appears in its parent's list.
+            let p = self.parent[i];
+            if p != NONE && !self.children(NodeId(p)).any(|c| c == id) {
+                return Err(Invariant::ChildList(id));
+            }
+        }
+        // Costs: the root costs zero and every other node costs its parent's cost plus the
+        // edge. With connectivity checked above this recurrence, checked locally at every node,
+        // means by induction that each cached cost equals the sum along its root path.
+        for v in 0..n {
+            let i = v as usize;
+            let p = self.parent[i];
+            let expected = if p == NONE {
+                Cost::ZERO
+            } else {
+                self.cost_of(p).extend(
+                    self.pos[p as usize].dist(self.pos[i]),
+                    self.flags[i] & EDGE_BLOCKED != 0,
+                )
+            };
+            let cached = self.cost_of(v);
+            if cached.blocked != expected.blocked
+                || cached.length.to_bits() != expected.length.to_bits()
+            {
+                return Err(Invariant::StaleCost(NodeId(v)));
+            }
+        }
+        Ok(())
+    }
+
+    // --- internals (ids here are known to be < len) ---
+
+    fn cost_of(&self, v: u16) -> Cost {
+        Cost {
+            length: self.cost[v as usize],
+            blocked: self.flags[v as usize] & PATH_BLOCKED != 0,
+        }
+    }
+
+    fn init_node(&mut self, id: u16, pos: Point, parent: u16) {
+        let i = id as usize;
+        self.pos[i] = pos;
+        self.parent[i] = parent;
+        self.first_child[i] = NONE;
+        self.next_sibling[i] = NONE;
+        self.prev_sibling[i] = NONE;
+    }
+
+    fn set_flag(&mut self, v: u16, bit: u8, on: bool) {
+        let f = &mut self.flags[v as usize];
+        *f = if on { *f | bit } else { *f & !bit };
+    }
+
+    /// Pushes `c` (currently detached) at the front of `p`'s child list.
+    fn link(&mut self, c: u16, p: u16) {
+        let first = self.first_child[p as usize];
+        self.parent[c as usize] = p;
+        self.prev_sibling[c as usize] = NONE;
+        self.next_sibling[c as usize] = first;
+        if first != NONE {
+            self.prev_sibling[first as usize] = c;
+        }
+        self.first_child[p as usize] = c;
+    }
+
+    /// Detaches `c` from its parent's child list (no-op for a detached node).
+    fn unlink(&mut self, c: u16) {
+        let p = self.parent[c as usize];
+        if p == NONE {
+            return;
+        }
+        let (prev, next) = (self.prev_sibling[c as usize], self.next_sibling[c as usize]);
+        if prev == NONE {
+            self.first_child[p as usize] = next;
+        } else {
+            self.next_sibling[prev as usize] = next;
+        }
+        if next != NONE {
+            self.prev_sibling[next as usize] = prev;
+        }
+        self.parent[c as usize] = NONE;
+        self.prev_sibling[c as usize] = NONE;
+        self.next_sibling[c as usize] = NONE;
+    }
+
+    /// Recomputes the cached cost of `v` from its parent's.
+    fn refresh_cost(&mut self, v: u16) {
+        let i = v as usize;
+        let p = self.parent[i];
+        if p == NONE {
+            self.cost[i] = 0.0;
+            self.set_flag(v, PATH_BLOCKED, false);
+            return;
+        }
+        let c = self.cost_of(p).extend(
+            self.pos[p as usize].dist(self.pos[i]),
+            self.flags[i] & EDGE_BLOCKED != 0,
+        );
+        self.cost[i] = c.length;
+        self.set_flag(v, PATH_BLOCKED, c.blocked);
+    }
+
+    /// Recomputes the costs of `top`'s whole subtree in preorder (parents before children),
+    /// walking the intrusive links: no stack, O(subtree size).
+    fn refresh_subtree(&mut self, top: u16) {
+        let mut v = top;
+        for _ in 0..self.len {
+            self.refresh_cost(v);
+            match self.next_preorder(v, top) {
+                Some(next) => v = next,
+                None => return,
+            }
+        }
+    }
+
+    /// The node after `v` in a preorder walk of `top`'s subtree.
+    fn next_preorder(&self, v: u16, top: u16) -> Option<u16> {
+        let fc = self.first_child[v as usize];
+        if fc != NONE {
+            return Some(fc);
+        }
+        let mut u = v;
+        for _ in 0..self.len {
+            if u == top {
+                return None;
+            }
+            let s = self.next_sibling[u as usize];
+            if s != NONE {
+                return Some(s);
+            }
+            u = self.parent[u as usize];
+            if u == NONE {
+                return None;
+            }
+        }
+        None
+    }
+}
+
+/// Iterator over the children of a node.
+#[derive(Clone, Debug)]
+pub struct Children<'t, const N: usize> {
+    tree: &'t Tree<N>,
+    next: u16,
+}
+
+impl<const N: usize> Iterator for Children<'_, N> {
+    type Item = NodeId;
+    fn next(&mut self) -> Option<NodeId> {
+        if self.next == NONE {
+            return None;
+        }
+        let c = self.next;
+        self.next = self
+            .tree
+            .next_sibling
+            .get(c as usize)
+            .copied()
+            .unwrap_or(NONE);
+        Some(NodeId(c))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(x: f32, y: f32) -> Point {
+        Point::new(x, y)
+    }
+
+    #[test]
+    fn costs_follow_edges_and_reroot() {
+        let mut t = Tree::<8>::new();
+        let r = t.reset(p(0.0, 0.0));
+        let a = t.add(p(3.0, 0.0), r, false).unwrap();
+        let b = t.add(p(3.0, 4.0), a, false).unwrap();
+        let c = t.add(p(0.0, 4.0), b, true).unwrap();
+        assert_eq!(t.cost(b).unwrap().length, 7.0);
+        assert_eq!(
+            t.cost(c).unwrap(),
+            Cost {
+                length: 10.0,
+                blocked: true
+            }
+        );
+        // Shortcut c to the root: c's cost drops and it is no longer blocked.
+        t.set_parent(c, r, false).unwrap();
+        assert_eq!(
+            t.cost(c).unwrap(),
+            Cost {
+                length: 4.0,
+                blocked: false
+            }
+        );
+        // b below c: b's cost follows.
+        t.set_parent(b, c, false).unwrap();
+        assert_eq!(t.cost(b).unwrap().length, 7.0);
+        assert_eq!(t.set_parent(c, b, false), Err(TreeError::WouldCycle));
+        assert_eq!(t.set_parent(r, a, false), Err(TreeError::WouldCycle));
+        t.validate().unwrap();
+        // Re-root at b: path r -> c -> b reverses.
+        t.set_edge_blocked(b, true).unwrap();
+        t.set_root(b).unwrap();
+        t.validate().unwrap();
+        assert_eq!(t.root(), Some(b));
+        assert_eq!(t.parent(c), Some(b));
+        assert_eq!(t.parent(r), Some(c));
+        assert_eq!(t.edge_blocked(c), Some(true), "the c-b edge keeps its flag");
+        assert_eq!(
+            t.cost(r).unwrap(),
+            Cost {
+                length: 7.0,
+                blocked: true
+            }
+        );
+        assert_eq!(t.cost(a).unwrap().length, 10.0);
+        let mut buf = [NodeId(0); 8];
+        let n = t.path_ids(a, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &[b, c, r, a]);
+        let mut small = [Point::ZERO; 2];
+        assert_eq!(t.path_points(a, &mut small), Err(TreeError::BufferTooSmall));
+    }
+
+    #[test]
+    fn full_arena_is_an_error_and_changes_nothing() {
+        let mut t = Tree::<2>::new();
+        let r = t.reset(p(0.0, 0.0));
+        t.add(p(1.0, 0.0), r, false).unwrap();
+        let before = t.clone();
+        assert_eq!(t.add(p(2.0, 0.0), r, false), Err(TreeError::Full));
+        assert_eq!(t.positions(), before.positions());
+        assert_eq!(
+            t.add(p(2.0, 0.0), NodeId(5), false),
+            Err(TreeError::UnknownNode)
+        );
+        t.reset(p(4.0, 4.0));
+        assert_eq!(t.len(), 1);
+        t.validate().unwrap();
+    }
+}
