@@ -71,7 +71,7 @@ fn bench_index(c: &mut Criterion) {
         )
         .unwrap();
     }
-    let mut idx = Box::new(SpatialIndex::<4096, 400>::new(100.0, 100.0, 5.0).unwrap());
+    let mut idx = Box::new(SpatialIndex::<4096, 400>::with_bounds(100.0, 100.0, 5.0).unwrap());
     for id in tree.ids() {
         idx.insert(id, tree.position(id).unwrap()).unwrap();
     }

@@ -116,6 +116,68 @@ impl Deadline {
     }
 }
 
+/// Counts the work the planner does and reports it to the clock in batches, so a virtual clock
+/// advances with work while a real clock is read as usual.
+#[derive(Debug)]
+pub struct Meter<'c, C: Clock + ?Sized> {
+    clock: &'c C,
+    pending: Cell<u32>,
+}
+
+impl<'c, C: Clock + ?Sized> Meter<'c, C> {
+    /// A meter over `clock`.
+    pub fn new(clock: &'c C) -> Self {
+        Self {
+            clock,
+            pending: Cell::new(0),
+        }
+    }
+
+    /// Records `units` of work.
+    #[inline]
+    pub fn charge(&self, units: u32) {
+        let p = self.pending.get().saturating_add(units);
+        if p >= 4096 {
+            self.clock.charge(p);
+            self.pending.set(0);
+        } else {
+            self.pending.set(p);
+        }
+    }
+
+    /// Reports pending work, then reads the clock.
+    pub fn now(&self) -> u64 {
+        self.flush();
+        self.clock.now()
+    }
+
+    /// Reports pending work, then tells whether `deadline` has passed.
+    pub fn expired(&self, deadline: &Deadline) -> bool {
+        self.flush();
+        deadline.expired(self.clock)
+    }
+
+    /// A deadline `budget` from now, never later than `outer`.
+    pub fn deadline(&self, budget: Duration, outer: Deadline) -> Deadline {
+        self.flush();
+        Deadline::after(self.clock, budget).min(outer)
+    }
+
+    /// Reports pending work to the clock.
+    pub fn flush(&self) {
+        let p = self.pending.replace(0);
+        if p > 0 {
+            self.clock.charge(p);
+        }
+    }
+}
+
+impl<C: Clock + ?Sized> Drop for Meter<'_, C> {
+    fn drop(&mut self) {
+        self.flush();
+    }
+}
+
 /// A clock for tests and virtual-time simulation. It reads a counter that advances
 /// - by hand ([`FakeClock::advance`], [`FakeClock::set`]),
 /// - by `step` ticks at every reading ([`FakeClock::with_step`]), so a loop bounded by a

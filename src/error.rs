@@ -47,6 +47,9 @@ error_enum! {
         OutOfBounds => "position outside the map",
         /// The position lies in (or within the safety margin of) an obstacle.
         InObstacle => "position inside an obstacle",
+        /// The assisting metric places the position at an infinite distance (cut off from the
+        /// start's free region).
+        Unreachable => "position unreachable from the start",
     }
 }
 

@@ -36,20 +36,50 @@ pub struct SpatialIndex<const N: usize, const B: usize> {
     len: usize,
 }
 
+impl<const N: usize, const B: usize> Default for SpatialIndex<N, B> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     const SIZES_FIT: () = assert!(
         N > 0 && N < NONE as usize && B > 0 && B < NONE as usize,
         "SpatialIndex capacities must be 1..65535"
     );
 
+    /// An empty index with a single bucket (give it a shape with [`SpatialIndex::reshape`]).
+    /// A `const fn`, so an index can live in a `static`.
+    pub const fn new() -> Self {
+        let () = Self::SIZES_FIT;
+        Self {
+            head: [NONE; B],
+            next: [NONE; N],
+            prev: [NONE; N],
+            bucket_of: [NONE; N],
+            cols: 1,
+            rows: 1,
+            side: f32::MAX,
+            inv_side: 0.0,
+            len: 0,
+        }
+    }
+
     /// An empty index over a `width x height` metre map with square buckets of side at least
     /// `min_side` metres (larger when `B` buckets of that side would not cover the map).
     /// `None` unless all three are finite and positive.
-    pub fn new(width: f32, height: f32, min_side: f32) -> Option<Self> {
-        let () = Self::SIZES_FIT;
+    pub fn with_bounds(width: f32, height: f32, min_side: f32) -> Option<Self> {
+        let mut idx = Self::new();
+        idx.reshape(width, height, min_side).then_some(idx)
+    }
+
+    /// Empties the index and lays its buckets over a `width x height` metre map (as
+    /// [`SpatialIndex::with_bounds`]). Returns `false`, leaving the index unchanged, unless all
+    /// three are finite and positive.
+    pub fn reshape(&mut self, width: f32, height: f32, min_side: f32) -> bool {
         let good = |v: f32| v.is_finite() && v > 0.0;
         if !(good(width) && good(height) && good(min_side)) {
-            return None;
+            return false;
         }
         let area_side = libm::sqrtf(width * height / B as f32);
         let mut side = min_side.max(area_side);
@@ -64,19 +94,14 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         }
         let (c, r) = count(side);
         if c * r > B as f32 {
-            return None;
+            return false;
         }
-        Some(Self {
-            head: [NONE; B],
-            next: [NONE; N],
-            prev: [NONE; N],
-            bucket_of: [NONE; N],
-            cols: c as u16,
-            rows: r as u16,
-            side,
-            inv_side: 1.0 / side,
-            len: 0,
-        })
+        self.clear();
+        self.cols = c as u16;
+        self.rows = r as u16;
+        self.side = side;
+        self.inv_side = 1.0 / side;
+        true
     }
 
     /// Side of a bucket in metres.
@@ -353,11 +378,11 @@ mod tests {
 
     #[test]
     fn bucket_side_grows_to_fit_the_budget() {
-        let idx = SpatialIndex::<16, 16>::new(100.0, 100.0, 5.0).unwrap();
+        let idx = SpatialIndex::<16, 16>::with_bounds(100.0, 100.0, 5.0).unwrap();
         let (c, r) = idx.shape();
         assert!(c as usize * r as usize <= 16);
         assert!(idx.bucket_side() >= 25.0);
-        assert!(SpatialIndex::<16, 16>::new(f32::NAN, 1.0, 1.0).is_none());
+        assert!(SpatialIndex::<16, 16>::with_bounds(f32::NAN, 1.0, 1.0).is_none());
     }
 
     #[test]
@@ -367,7 +392,7 @@ mod tests {
             Point::new(9.0, 9.0),
             Point::new(4.0, 5.0),
         ];
-        let mut idx = SpatialIndex::<8, 64>::new(10.0, 10.0, 2.0).unwrap();
+        let mut idx = SpatialIndex::<8, 64>::with_bounds(10.0, 10.0, 2.0).unwrap();
         for (i, p) in pts.iter().enumerate() {
             idx.insert(NodeId(i as u16), *p).unwrap();
         }

@@ -51,7 +51,7 @@
 //! let n = tree.path_points(end, &mut path).unwrap();
 //! assert_eq!(&path[..n], &[start, around, goal]);
 //!
-//! let mut index: SpatialIndex<64, 16> = SpatialIndex::new(10.0, 10.0, 2.5).unwrap();
+//! let mut index: SpatialIndex<64, 16> = SpatialIndex::with_bounds(10.0, 10.0, 2.5).unwrap();
 //! for id in tree.ids() {
 //!     index.insert(id, tree.position(id).unwrap()).unwrap();
 //! }
@@ -72,10 +72,23 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod builtin;
 pub mod clock;
+pub mod config;
 pub mod error;
 pub mod geometry;
 pub mod index;
 pub mod map;
+pub mod metric;
+pub mod planner;
+mod rewire;
+pub mod sample;
+pub mod search;
 pub mod sweep;
 pub mod tree;
+
+pub use config::{Base, Config, MetricKind, RewireMode};
+pub use geometry::Point;
+pub use map::{Circle, Map, OccupancyGrid};
+pub use metric::{DiffusionTable, Euclidean, Metric};
+pub use planner::{Planner, Progress, Stats, Storage};

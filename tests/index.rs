@@ -23,7 +23,7 @@ fn index_agrees_with_linear_scan() {
     for round in 0..40 {
         let (w, h) = (10.0 + unit(&mut rng) * 190.0, 10.0 + unit(&mut rng) * 190.0);
         let side = [0.5f32, 2.0, 5.0, 20.0][round % 4];
-        let mut idx = Box::new(SpatialIndex::<N, B>::new(w, h, side).unwrap());
+        let mut idx = Box::new(SpatialIndex::<N, B>::with_bounds(w, h, side).unwrap());
         let n = 1 + (rng.next_u32() as usize % N);
         // Clustered or uniform points.
         let clustered = round % 3 == 0;
@@ -106,7 +106,7 @@ fn index_agrees_with_linear_scan() {
 #[test]
 fn early_stop_and_truncated_collection() {
     let pts: Vec<Point> = (0..50).map(|i| Point::new(i as f32 * 0.1, 1.0)).collect();
-    let mut idx = SpatialIndex::<64, 16>::new(10.0, 10.0, 1.0).unwrap();
+    let mut idx = SpatialIndex::<64, 16>::with_bounds(10.0, 10.0, 1.0).unwrap();
     for (i, p) in pts.iter().enumerate() {
         idx.insert(NodeId(i as u16), *p).unwrap();
     }

@@ -1,0 +1,302 @@
+//! Planner configuration: the base algorithm, the assisting metric, the two switches of the
+//! paper (bidirectional search, new rewiring) and the parameters of its Table 2. The 20
+//! planners of the paper's Table 1 are named configurations of the one planner.
+
+use core::fmt;
+use core::time::Duration;
+
+/// The base real-time planner.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Base {
+    /// RT-RRT* (Naderi et al., 2015): goal-directed sampling on the segment from the goal's
+    /// nearest node, an adaptive neighbourhood radius, random rewiring instead of goal
+    /// rewiring; the metric only chooses the nearest node.
+    RtRrt,
+    /// AM-RRT* (Armstrong et al., 2021): goal sampling, metric-guided nearest node and
+    /// steering, goal rewiring sorted by the metric.
+    AmRrt,
+}
+
+/// Which assisting metric a configuration is meant for (for its name; the metric itself is
+/// the value passed to the planner).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MetricKind {
+    /// `d_E`, written (E).
+    Euclidean,
+    /// `d_D`, written (D).
+    Diffusion,
+    /// `d_G`, written (G).
+    Geodesic,
+}
+
+impl MetricKind {
+    /// The letter used in planner names.
+    pub const fn letter(self) -> char {
+        match self {
+            Self::Euclidean => 'E',
+            Self::Diffusion => 'D',
+            Self::Geodesic => 'G',
+        }
+    }
+}
+
+/// How the rewiring phases share time with expansion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RewireMode {
+    /// As the reference: after every expansion, root rewiring runs for its full `t_root` and
+    /// goal (or random) rewiring for its full budget, sweeps restarting as often as they end.
+    /// With thousands of nodes the budgets, not sampling, set the expansion rate.
+    Faithful,
+    /// After every expansion each rewiring phase visits at most `visits` nodes (and stops
+    /// earlier when its time budget ends), resuming where it stopped at the next expansion.
+    /// Rewiring work then grows with the expansions, not with wall time spent idle.
+    PerExpansion {
+        /// Node visits per phase and expansion.
+        visits: u16,
+    },
+}
+
+/// Everything that configures a planner. Start from a named constructor
+/// ([`Config::am_rrt`], [`Config::bi_am_rrt`], [`Config::table1`], ...) and adjust fields.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config {
+    /// Base algorithm.
+    pub base: Base,
+    /// Assisting metric the configuration is named for.
+    pub metric: MetricKind,
+    /// Grow a reverse tree from the goal until the trees meet (suffix `-1`, prefix `Bi-`).
+    pub bidirectional: bool,
+    /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`).
+    pub new_rewiring: bool,
+    /// `t_exp`: expansion time per `plan` call.
+    pub t_exp: Duration,
+    /// `t_root`: root rewiring budget per expansion.
+    pub t_root: Duration,
+    /// `t_goal` (AM-RRT*) or `t_rand` (RT-RRT*): goal or random rewiring budget per expansion
+    /// (goal rewiring gets it twice with the new rewiring: once per kind).
+    pub t_goal: Duration,
+    /// `e_max`: longest edge added by an expansion, and the `Nearby` radius, in metres.
+    pub e_max: f32,
+    /// `n_max`: node density limit within the neighbourhood.
+    pub n_max: u16,
+    /// `sigma`: connection distance of the two trees, in metres.
+    pub sigma: f32,
+    /// Candidates drawn by the stochastic steering (replaces the reference's 2 ms `t_steer`).
+    pub steer_candidates: u16,
+    /// Rejection-sampling attempts for one free sample before the expansion is skipped.
+    pub sample_attempts: u16,
+    /// How rewiring shares time with expansion.
+    pub rewire_mode: RewireMode,
+    /// Hard cap on expansions per `plan` call, whatever the clock says (a frozen clock still
+    /// gives bounded calls).
+    pub max_expansions_per_call: u32,
+    /// Probability threshold above which the goal (or RT-RRT*'s goal line) is sampled while
+    /// the goal is not in the tree (paper: 0.7).
+    pub p_goal: f32,
+    /// Below this probability a uniform state is sampled, above it the informed ellipse once
+    /// the goal is in the tree (reference: 0.7 / 1.5; the paper prints 0.5).
+    pub p_uniform: f32,
+}
+
+impl Config {
+    /// The base planner with Table 2's parameters, unidirectional, original rewiring.
+    pub const fn new(base: Base, metric: MetricKind) -> Self {
+        let (t_root, t_goal, n_max) = match base {
+            Base::RtRrt => (3, 3, 12),
+            Base::AmRrt => (2, 4, 20),
+        };
+        Self {
+            base,
+            metric,
+            bidirectional: false,
+            new_rewiring: false,
+            t_exp: Duration::from_millis(150),
+            t_root: Duration::from_millis(t_root),
+            t_goal: Duration::from_millis(t_goal),
+            e_max: 5.0,
+            n_max,
+            sigma: 30.0,
+            steer_candidates: 24,
+            sample_attempts: 64,
+            rewire_mode: RewireMode::PerExpansion { visits: 24 },
+            max_expansions_per_call: 20_000,
+            p_goal: 0.7,
+            p_uniform: 0.7 / 1.5,
+        }
+    }
+
+    /// RT-RRT* (metric `Euclidean`) or RT-RRT*(D) (`Diffusion`).
+    pub const fn rt_rrt(metric: MetricKind) -> Self {
+        Self::new(Base::RtRrt, metric)
+    }
+
+    /// AM-RRT*(E/D/G).
+    pub const fn am_rrt(metric: MetricKind) -> Self {
+        Self::new(Base::AmRrt, metric)
+    }
+
+    /// Bi-RT-RRT* / Bi-RT-RRT*(D): both switches on.
+    pub const fn bi_rt_rrt(metric: MetricKind) -> Self {
+        Self::rt_rrt(metric)
+            .with_bidirectional(true)
+            .with_new_rewiring(true)
+    }
+
+    /// Bi-AM-RRT*(E/D/G): both switches on (the paper's proposal).
+    pub const fn bi_am_rrt(metric: MetricKind) -> Self {
+        Self::am_rrt(metric)
+            .with_bidirectional(true)
+            .with_new_rewiring(true)
+    }
+
+    /// With bidirectional search on or off.
+    pub const fn with_bidirectional(mut self, on: bool) -> Self {
+        self.bidirectional = on;
+        self
+    }
+
+    /// With the new rewiring on or off.
+    pub const fn with_new_rewiring(mut self, on: bool) -> Self {
+        self.new_rewiring = on;
+        self
+    }
+
+    /// With the connection distance `sigma`.
+    pub const fn with_sigma(mut self, sigma: f32) -> Self {
+        self.sigma = sigma;
+        self
+    }
+
+    /// With a rewiring mode.
+    pub const fn with_rewire_mode(mut self, mode: RewireMode) -> Self {
+        self.rewire_mode = mode;
+        self
+    }
+
+    /// The 20 planners of the paper's Table 1, row by row: original, bidirectional only (`-1`),
+    /// new rewiring only (`-2`), both (`Bi-`); in each row RT-RRT*, RT-RRT*(D), AM-RRT*(E),
+    /// AM-RRT*(D), AM-RRT*(G).
+    pub const fn table1() -> [Config; 20] {
+        let bases = [
+            Self::rt_rrt(MetricKind::Euclidean),
+            Self::rt_rrt(MetricKind::Diffusion),
+            Self::am_rrt(MetricKind::Euclidean),
+            Self::am_rrt(MetricKind::Diffusion),
+            Self::am_rrt(MetricKind::Geodesic),
+        ];
+        let mut out = [bases[0]; 20];
+        let mut row = 0;
+        while row < 4 {
+            let mut col = 0;
+            while col < 5 {
+                out[row * 5 + col] = bases[col]
+                    .with_bidirectional(row == 1 || row == 3)
+                    .with_new_rewiring(row == 2 || row == 3);
+                col += 1;
+            }
+            row += 1;
+        }
+        out
+    }
+
+    /// The configuration with this Table 1 name (e.g. `"Bi-AM-RRT*(D)"`, `"RT-RRT*-2"`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::table1().into_iter().find(|c| c.name() == name)
+    }
+
+    /// The paper's name of this configuration (a `Display` value).
+    pub const fn name(&self) -> PlannerName {
+        PlannerName(*self)
+    }
+}
+
+/// The paper's Table 1 name of a configuration, e.g. `Bi-AM-RRT*(D)`, `RT-RRT*(D)-1`.
+#[derive(Clone, Copy, Debug)]
+pub struct PlannerName(Config);
+
+impl fmt::Display for PlannerName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let c = &self.0;
+        let both = c.bidirectional && c.new_rewiring;
+        if both {
+            f.write_str("Bi-")?;
+        }
+        match (c.base, c.metric) {
+            (Base::RtRrt, MetricKind::Euclidean) => f.write_str("RT-RRT*")?,
+            (Base::RtRrt, m) => write!(f, "RT-RRT*({})", m.letter())?,
+            (Base::AmRrt, m) => write!(f, "AM-RRT*({})", m.letter())?,
+        }
+        if !both && c.bidirectional {
+            f.write_str("-1")?;
+        }
+        if !both && c.new_rewiring {
+            f.write_str("-2")?;
+        }
+        Ok(())
+    }
+}
+
+impl PartialEq<&str> for PlannerName {
+    fn eq(&self, other: &&str) -> bool {
+        // Compare without allocating: write into a comparer.
+        struct Cmp<'a>(&'a str, bool);
+        impl fmt::Write for Cmp<'_> {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                if self.1 && self.0.starts_with(s) {
+                    self.0 = &self.0[s.len()..];
+                } else {
+                    self.1 = false;
+                }
+                Ok(())
+            }
+        }
+        let mut c = Cmp(other, true);
+        let _ = fmt::write(&mut c, format_args!("{self}"));
+        c.1 && c.0.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table1_names() {
+        let names: [&str; 20] = [
+            "RT-RRT*",
+            "RT-RRT*(D)",
+            "AM-RRT*(E)",
+            "AM-RRT*(D)",
+            "AM-RRT*(G)",
+            "RT-RRT*-1",
+            "RT-RRT*(D)-1",
+            "AM-RRT*(E)-1",
+            "AM-RRT*(D)-1",
+            "AM-RRT*(G)-1",
+            "RT-RRT*-2",
+            "RT-RRT*(D)-2",
+            "AM-RRT*(E)-2",
+            "AM-RRT*(D)-2",
+            "AM-RRT*(G)-2",
+            "Bi-RT-RRT*",
+            "Bi-RT-RRT*(D)",
+            "Bi-AM-RRT*(E)",
+            "Bi-AM-RRT*(D)",
+            "Bi-AM-RRT*(G)",
+        ];
+        for (c, n) in Config::table1().iter().zip(names) {
+            assert!(c.name() == n, "{n}");
+            assert_eq!(Config::from_name(n), Some(*c));
+        }
+        assert_eq!(
+            Config::from_name("Bi-AM-RRT*(D)"),
+            Some(Config::bi_am_rrt(MetricKind::Diffusion))
+        );
+        assert!(Config::from_name("Bi-AM-RRT*").is_none());
+        assert!(Config::from_name("AM-RRT*(D)-12").is_none());
+    }
+}

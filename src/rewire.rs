@@ -1,0 +1,227 @@
+//! Rewiring (paper section 4.2, Algorithms 3-6, and the AM-RRT* / RT-RRT* sweeps they extend).
+//! Every sweep is resumable: its queue, stack and seen-set live in the [`TreeStore`], a call
+//! works until its deadline or its visit cap and returns, and the next call continues where it
+//! stopped. A sweep that runs dry restarts from the root and forgets what it had seen.
+//!
+//! Costs compare blocked-last ([`Cost`]), so a node whose path crosses a dynamic obstacle takes
+//! any parent with a free path. A rewire never increases a node's cost: it happens only when
+//! the new cost is strictly lower, and a cost-lowering edge can never close a cycle.
+//!
+//! - **Root rewiring, first kind** (AM-RRT*, RT-RRT*): breadth-first from the root; a dequeued
+//!   node `x` takes as parent any `x_near` in `Nearby(x)` with `Cost(x_near) + d(x_near, x) <
+//!   Cost(x)` over a free segment; unseen neighbours are enqueued.
+//! - **Root rewiring, second kind** (Algorithm 4, while the queue holds more than two nodes):
+//!   `x_r1` is dequeued and `x_r2`, the next in the queue, is only *peeked* (it gets its own
+//!   turn as `x_r1` later, so no node loses its visit); `x_r1` looks for a parent among the
+//!   nodes near `x_r2`, which reaches up to about `2 e_max` and straightens corners. The
+//!   paper's garbled cost test is read as the true costs above.
+//! - **Goal rewiring, first kind** (AM-RRT*): a stack (current branch) and a queue (next
+//!   branches) sweep from the root towards the goal inside the informed ellipse. A node `x`
+//!   offers itself as parent to its neighbours, visited in order of decreasing `d_A(., goal)`;
+//!   unseen neighbours with a free segment form the frontier, pushed on the stack (the one
+//!   nearest the goal by the metric on top) and prepended to the queue. When the stack's top is
+//!   farther from the goal than `x` was, the branch stopped approaching: the stack is cleared.
+//! - **Goal rewiring, second kind** (Algorithms 5-6): `x_r1` popped (from the stack when it
+//!   holds more than two nodes, else from the queue) and `x_r2` peeked after it; inside the
+//!   ellipse, `x_r2` offers itself as parent to the nodes near `x_r1`. The paper's `len(S) > 1
+//!   or ...` clearing test is read as `and` (the notes), i.e. the same "stopped approaching"
+//!   test as the first kind.
+//! - **Random rewiring** (RT-RRT*): new nodes (and the nearest node of rejected samples) are
+//!   queued; a dequeued node offers itself as parent to its neighbours and requeues those it
+//!   improved.
+
+use crate::clock::{Clock, Deadline, Meter};
+use crate::geometry::{Ellipse, Point};
+use crate::metric::Metric;
+use crate::search::{Env, Near, Target, TreeStore};
+use crate::tree::NodeId;
+
+/// Limits of one rewiring call.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Slice {
+    /// Time limit.
+    pub deadline: Deadline,
+    /// Node visits allowed.
+    pub visits: u32,
+}
+
+impl<const N: usize, const B: usize> TreeStore<N, B> {
+    /// Makes `parent` the parent of `child` when that lowers `child`'s cost over a free
+    /// segment. Returns whether the edge changed.
+    fn try_rewire<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        parent: NodeId,
+        child: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> bool {
+        if parent == child || self.tree.parent(child) == Some(parent) {
+            return false;
+        }
+        let (pp, pc) = (self.pos(parent), self.pos(child));
+        let new = self.cost(parent).extend(pp.dist(pc), false);
+        if new >= self.cost(child) || !env.free(pp, pc, meter) {
+            return false;
+        }
+        meter.charge(4);
+        self.tree.set_parent(child, parent, false).is_ok()
+    }
+
+    /// Root rewiring, both kinds (module docs). `second_kind` enables Algorithm 4.
+    pub(crate) fn rewire_root<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        slice: Slice,
+        second_kind: bool,
+        meter: &Meter<'_, C>,
+    ) {
+        let Some(root) = self.tree.root() else {
+            return;
+        };
+        let radius = env.radius(self.tree.len());
+        let mut near = Near::new();
+        for _ in 0..slice.visits {
+            if meter.expired(&slice.deadline) {
+                return;
+            }
+            if self.root_queue.is_empty() {
+                self.root_seen.clear();
+                self.root_seen.insert(root);
+                let _ = self.root_queue.push_back(root);
+            }
+            let Some(x1) = self.root_queue.pop_front() else {
+                return;
+            };
+            // Second kind: search around the next node in line, which stays queued.
+            let center = match self.root_queue.front() {
+                Some(&x2) if second_kind && self.root_queue.len() >= 2 => x2,
+                _ => x1,
+            };
+            self.nearby(self.pos(center), radius, &mut near, meter);
+            for &x_near in near.iter() {
+                meter.charge(1);
+                self.try_rewire(env, x_near, x1, meter);
+                if self.root_seen.insert(x_near) {
+                    let _ = self.root_queue.push_back(x_near);
+                }
+            }
+        }
+    }
+
+    /// RT-RRT*'s random rewiring (module docs).
+    pub(crate) fn rewire_random<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        slice: Slice,
+        meter: &Meter<'_, C>,
+    ) {
+        let radius = env.radius(self.tree.len());
+        let mut near = Near::new();
+        for _ in 0..slice.visits {
+            if meter.expired(&slice.deadline) {
+                return;
+            }
+            let Some(x) = self.goal_queue.pop_front() else {
+                return;
+            };
+            self.nearby(self.pos(x), radius, &mut near, meter);
+            for &x_near in near.iter() {
+                meter.charge(1);
+                if self.try_rewire(env, x, x_near, meter) {
+                    let _ = self.goal_queue.push_back(x_near);
+                }
+            }
+        }
+    }
+
+    /// Goal rewiring of one kind (module docs), towards `goal`, whose node must be in the tree.
+    pub(crate) fn rewire_goal<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        goal: &Target,
+        slice: Slice,
+        second_kind: bool,
+        meter: &Meter<'_, C>,
+    ) {
+        let (Some(root), Some(goal_node)) = (self.tree.root(), goal.node) else {
+            return;
+        };
+        let radius = env.radius(self.tree.len());
+        let mut near = Near::new();
+        let mut frontier = Near::new();
+        for _ in 0..slice.visits {
+            if meter.expired(&slice.deadline) {
+                return;
+            }
+            if self.goal_stack.is_empty() && self.goal_queue.is_empty() {
+                self.goal_seen.clear();
+                self.goal_seen.insert(root);
+                let _ = self.goal_stack.push(root);
+            }
+            // The ellipse follows the goal's current cost (it shrinks as rewiring succeeds).
+            let goal_cost = self.cost(goal_node);
+            let ellipse = if goal_cost.blocked {
+                None
+            } else {
+                Ellipse::new(self.pos(root), goal.pos, goal_cost.length * 1.0001)
+            };
+            let inside = |p: Point| ellipse.as_ref().is_none_or(|e| e.contains(p));
+            // Pick x_r1, and x_r2 for the second kind.
+            let from_stack = if second_kind {
+                self.goal_stack.len() > 2 || self.goal_queue.len() < 2
+            } else {
+                !self.goal_stack.is_empty()
+            };
+            let x1 = if from_stack {
+                self.goal_stack
+                    .pop()
+                    .or_else(|| self.goal_queue.pop_front())
+            } else {
+                self.goal_queue.pop_front()
+            };
+            let Some(x1) = x1 else {
+                continue;
+            };
+            let x2 = if !second_kind {
+                None
+            } else if from_stack {
+                self.goal_stack.last().copied()
+            } else {
+                self.goal_queue.front().copied()
+            };
+            let x1_pos = self.pos(x1);
+            if !inside(x1_pos) {
+                continue;
+            }
+            let d1 = env.metric(x1_pos, goal.pos, meter);
+            self.nearby(x1_pos, radius, &mut near, meter);
+            // Decreasing d_A(., goal): the neighbour nearest the goal ends on top of the stack.
+            let mut keyed: heapless::Vec<(f32, NodeId), { crate::search::NEAR_CAP }> = near
+                .iter()
+                .map(|&id| (env.metric(self.pos(id), goal.pos, meter), id))
+                .collect();
+            keyed.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            frontier.clear();
+            let parent = x2.unwrap_or(x1);
+            for &(_, x_near) in keyed.iter() {
+                meter.charge(1);
+                self.try_rewire(env, parent, x_near, meter);
+                if !self.goal_seen.contains(x_near) && env.free(x1_pos, self.pos(x_near), meter) {
+                    self.goal_seen.insert(x_near);
+                    let _ = frontier.push(x_near);
+                }
+            }
+            for &f in frontier.iter() {
+                let _ = self.goal_stack.push(f);
+            }
+            for &f in frontier.iter().rev() {
+                let _ = self.goal_queue.push_front(f);
+            }
+            if let Some(&top) = self.goal_stack.last()
+                && env.metric(self.pos(top), goal.pos, meter) > d1
+            {
+                self.goal_stack.clear();
+            }
+        }
+    }
+}

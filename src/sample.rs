@@ -1,0 +1,84 @@
+//! Sampling of the states a tree grows towards (paper Algorithm 2, `SampleState`, and its
+//! equation for `X_s`; RT-RRT*'s goal-line sampling).
+//!
+//! With `p` uniform in `[0, 1)`:
+//! - `p > p_goal` while the goal is set but not yet in the tree: the goal itself (AM-RRT*), or
+//!   a uniform point of the segment from the goal's nearest node to the goal (RT-RRT*);
+//! - else, `p < p_uniform`, or no goal, or the goal not in the tree: a uniform free state;
+//! - else: a uniform free state in the informed ellipse (foci root and goal, diameter the goal's
+//!   current cost).
+//!
+//! Free states come by rejection, bounded by `attempts`; a draw that keeps failing returns
+//! `None` and the expansion is simply skipped.
+
+use rand_core::Rng;
+
+use crate::geometry::{Ellipse, Point, unit_f32};
+use crate::map::Map;
+
+/// What the sampler needs to know about the tree's goal.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GoalView {
+    /// The goal position.
+    pub goal: Point,
+    /// Whether the goal is already a node of the tree.
+    pub in_tree: bool,
+    /// The informed ellipse once a path to the goal exists (`None`: no usable bound).
+    pub ellipse: Option<Ellipse>,
+    /// RT-RRT*: the tree node nearest the goal, the far end of the goal line.
+    pub line_from: Option<Point>,
+}
+
+/// A uniform free state of the map, or `None` after `attempts` rejected draws.
+pub fn uniform_free<R: Rng + ?Sized, const K: usize>(
+    rng: &mut R,
+    map: &Map<'_, K>,
+    attempts: u16,
+) -> Option<Point> {
+    let (w, h) = (map.grid().width_m(), map.grid().height_m());
+    (0..attempts).find_map(|_| {
+        let p = Point::new(unit_f32(rng) * w, unit_f32(rng) * h);
+        map.free_point(p).then_some(p)
+    })
+}
+
+/// A uniform free state inside `ellipse`, or `None` after `attempts` rejected draws.
+pub fn ellipse_free<R: Rng + ?Sized, const K: usize>(
+    rng: &mut R,
+    map: &Map<'_, K>,
+    ellipse: &Ellipse,
+    attempts: u16,
+) -> Option<Point> {
+    (0..attempts).find_map(|_| {
+        let p = ellipse.sample(rng);
+        map.free_point(p).then_some(p)
+    })
+}
+
+/// One draw of `X_s` (module docs). `p_goal` and `p_uniform` are the two thresholds.
+pub(crate) fn sample_state<R: Rng + ?Sized, const K: usize>(
+    rng: &mut R,
+    map: &Map<'_, K>,
+    goal: Option<&GoalView>,
+    p_goal: f32,
+    p_uniform: f32,
+    attempts: u16,
+) -> Option<Point> {
+    let p = unit_f32(rng);
+    let Some(g) = goal else {
+        return uniform_free(rng, map, attempts);
+    };
+    if p > p_goal && !g.in_tree {
+        return match g.line_from {
+            Some(from) => Some(from.lerp(g.goal, unit_f32(rng))),
+            None => Some(g.goal),
+        };
+    }
+    if p < p_uniform || !g.in_tree {
+        return uniform_free(rng, map, attempts);
+    }
+    match &g.ellipse {
+        Some(e) => ellipse_free(rng, map, e, attempts).or_else(|| uniform_free(rng, map, attempts)),
+        None => uniform_free(rng, map, attempts),
+    }
+}
