@@ -100,3 +100,332 @@ fn same_seed_same_run() {
         assert_ne!(a, c, "another seed gives another run");
     }
 }
+
+fn planner_on<'s, M: Metric, const NN: usize, const BB: usize>(
+    storage: &'s mut Storage<NN, BB>,
+    s: &'static Scenario,
+    metric: M,
+    cfg: Config,
+    seed: u64,
+) -> Planner<'s, 'static, M, XorShiftRng, NN, BB, K> {
+    let cfg = test_config(cfg, s);
+    Planner::new(
+        storage,
+        Map::new(s.grid),
+        metric,
+        XorShiftRng::seed_from_u64(seed),
+        cfg,
+        s.start,
+    )
+    .unwrap()
+}
+
+#[test]
+fn meet_and_graft_make_one_tree_with_the_goal() {
+    let s = &builtin::BUG_TRAP;
+    let mut met = 0;
+    for seed in 1..=6 {
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let cfg = Config::am_rrt(MetricKind::Euclidean).with_bidirectional(true);
+        let mut p = planner_on(&mut storage, s, Euclidean, cfg, seed);
+        let clock = clock();
+        p.set_goal(s.goals[0]).unwrap();
+        assert!(p.searching_backwards());
+        let mut calls = 0;
+        while !p.plan(&clock, s.start).unwrap().goal_in_tree {
+            calls += 1;
+            assert!(calls < 500, "seed {seed}: no meet");
+        }
+        // One valid tree holding the goal; the reverse tree is gone.
+        p.tree().validate().unwrap();
+        assert!(!p.searching_backwards());
+        assert!(p.reverse_tree().is_empty());
+        let g = p.goal_node().unwrap();
+        assert_eq!(p.tree().position(g), Some(s.goals[0]));
+        let mut path = vec![Point::ZERO; N];
+        let n = p.path(&mut path).unwrap();
+        assert_eq!(path[0], p.root_position());
+        assert_eq!(path[n - 1], s.goals[0]);
+        for w in path[..n].windows(2) {
+            assert!(p.map().free_path(w[0], w[1]), "grafted path crosses a wall");
+        }
+        met += usize::from(p.stats().met);
+    }
+    // In the bug trap the goal joins through the reverse tree most of the time.
+    assert!(met >= 4, "met {met} of 6");
+}
+
+#[test]
+fn an_obstacle_dropped_on_the_path_is_avoided() {
+    let s = &builtin::OPEN;
+    let table = landmark_table(&s.grid, 8);
+    for cfg in [
+        Config::bi_am_rrt(MetricKind::Diffusion),
+        Config::am_rrt(MetricKind::Euclidean),
+        Config::rt_rrt(MetricKind::Euclidean),
+    ] {
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let metric = DiffusionTable::new(&table).unwrap();
+        let mut p = planner_on(&mut storage, s, metric, cfg, 11);
+        let clock = clock();
+        let mut dropped: Option<(Circle, usize)> = None;
+        let mut blocked_calls = Vec::new();
+        let r = drive(
+            &mut p,
+            &clock,
+            s.goals[0],
+            Protocol::default(),
+            |p, agent, call| {
+                if let Some((c, at)) = dropped {
+                    if path_meets(p, &c) {
+                        blocked_calls.push(call - at);
+                    }
+                    return;
+                }
+                if agent.dist(s.start) < 3.0 {
+                    return;
+                }
+                // Drop a disc on the path, about 8 m ahead of the agent.
+                let mut path = vec![Point::ZERO; N];
+                let n = p.path(&mut path).unwrap();
+                let mut ahead = 0.0;
+                for w in path[..n].windows(2) {
+                    ahead += w[0].dist(w[1]);
+                    if ahead > 8.0 && w[1].dist(s.goals[0]) > 4.0 {
+                        let c = Circle::new(w[1], 1.5);
+                        p.add_obstacle(c).unwrap();
+                        assert!(path_meets(p, &c));
+                        dropped = Some((c, call));
+                        return;
+                    }
+                }
+            },
+        );
+        let name = cfg.name();
+        assert!(dropped.is_some(), "{name}: no drop");
+        assert!(r.reached && r.collisions == 0, "{name}: {r:?}");
+        // The path leaves the disc within a few calls and never goes back through it.
+        assert!(
+            blocked_calls.len() <= 3,
+            "{name}: path through the obstacle at {blocked_calls:?}"
+        );
+    }
+}
+
+#[test]
+fn rewiring_never_increases_a_cost() {
+    let s = &builtin::MAZE;
+    let table = landmark_table(&s.grid, 8);
+    for cfg in [
+        Config::am_rrt(MetricKind::Diffusion),
+        Config::bi_am_rrt(MetricKind::Diffusion),
+        Config::rt_rrt(MetricKind::Diffusion).with_new_rewiring(true),
+    ] {
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let mut p = planner_on(
+            &mut storage,
+            s,
+            DiffusionTable::new(&table).unwrap(),
+            cfg,
+            5,
+        );
+        let clock = clock();
+        p.set_goal(s.goals[0]).unwrap();
+        // The agent stays away from the root, so the tree is never re-rooted.
+        let agent = s.start + Point::new(1.0, 0.0);
+        let mut rewired = 0;
+        for _ in 0..40 {
+            let before: Vec<_> = p
+                .tree()
+                .ids()
+                .map(|id| p.tree().cost(id).unwrap())
+                .collect();
+            let parents: Vec<_> = p.tree().ids().map(|id| p.tree().parent(id)).collect();
+            p.plan(&clock, agent).unwrap();
+            p.tree().validate().unwrap();
+            for (i, old) in before.iter().enumerate() {
+                let id = bi_am_rrt::tree::NodeId(i as u16);
+                let new = p.tree().cost(id).unwrap();
+                assert!(
+                    new <= *old,
+                    "{}: node {i} cost {old:?} -> {new:?}",
+                    cfg.name()
+                );
+                rewired += usize::from(p.tree().parent(id) != parents[i]);
+            }
+        }
+        assert!(
+            rewired > 0,
+            "{}: rewiring never changed an edge",
+            cfg.name()
+        );
+    }
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let s = &builtin::OPEN;
+    let mut storage = Box::new(Storage::<256, 64>::new());
+    let cfg = Config::am_rrt(MetricKind::Euclidean);
+    let rng = || XorShiftRng::seed_from_u64(1);
+    let new = |st: &mut Storage<256, 64>, at: Point| {
+        Planner::<_, _, 256, 64, K>::new(st, Map::new(s.grid), Euclidean, rng(), cfg, at).err()
+    };
+    assert_eq!(
+        new(&mut storage, Point::new(f32::NAN, 1.0)),
+        Some(InputError::NotFinite)
+    );
+    assert_eq!(
+        new(&mut storage, Point::new(-1.0, 1.0)),
+        Some(InputError::OutOfBounds)
+    );
+    assert_eq!(
+        new(&mut storage, Point::new(12.0, 12.0)),
+        Some(InputError::InObstacle)
+    );
+    let mut p = planner_on(&mut storage, s, Euclidean, cfg, 1);
+    assert_eq!(
+        p.set_goal(Point::new(1.0, f32::INFINITY)),
+        Err(InputError::NotFinite)
+    );
+    assert_eq!(
+        p.set_goal(Point::new(41.0, 1.0)),
+        Err(InputError::OutOfBounds)
+    );
+    assert_eq!(
+        p.set_goal(Point::new(25.0, 10.0)),
+        Err(InputError::InObstacle)
+    );
+    let clock = clock();
+    assert_eq!(
+        p.plan(&clock, Point::new(f32::NAN, 0.0)),
+        Err(InputError::NotFinite)
+    );
+    assert_eq!(
+        p.plan(&clock, Point::new(0.0, 40.5)),
+        Err(InputError::OutOfBounds)
+    );
+    assert_eq!(
+        p.add_obstacle(Circle::new(Point::new(5.0, 5.0), f32::NAN)),
+        Err(bi_am_rrt::error::ObstacleError::BadCircle)
+    );
+    assert_eq!(
+        p.remove_obstacle(bi_am_rrt::map::ObstacleId(99)),
+        Err(bi_am_rrt::error::ObstacleError::UnknownId)
+    );
+    for i in 0..K {
+        p.add_obstacle(Circle::new(Point::new(30.0 + i as f32, 35.0), 0.3))
+            .unwrap();
+    }
+    assert_eq!(
+        p.add_obstacle(Circle::new(Point::new(5.0, 35.0), 0.3)),
+        Err(bi_am_rrt::error::ObstacleError::Full)
+    );
+    // No goal: planning still works and the waypoint is the root.
+    let pr = p.plan(&clock, s.start).unwrap();
+    assert_eq!(pr.waypoint, s.start);
+    assert!(!pr.goal_in_tree);
+}
+
+/// A 30 m map with a closed room (walls all round) holding the goal.
+fn room_map() -> Vec<u8> {
+    use bi_am_rrt::builtin::{Block, pack_blocks};
+    let blk = |x0, y0, x1, y1| Block { x0, y0, x1, y1 };
+    pack_blocks::<{ bi_am_rrt::OccupancyGrid::bytes_needed(30, 30) }>(
+        30,
+        30,
+        &[
+            blk(18, 18, 28, 19),
+            blk(18, 27, 28, 28),
+            blk(18, 18, 19, 28),
+            blk(27, 18, 28, 28),
+        ],
+    )
+    .to_vec()
+}
+
+#[test]
+fn an_unreachable_goal_is_refused_or_never_found() {
+    let bits = room_map();
+    let grid = bi_am_rrt::OccupancyGrid::new(&bits, 30, 30, 1.0).unwrap();
+    let goal = Point::new(22.5, 22.5);
+    // A table knows the room is cut off.
+    let table = landmark_table(&grid, 4);
+    let mut storage = Box::new(Storage::<512, 64>::new());
+    let cfg = Config::bi_am_rrt(MetricKind::Diffusion);
+    let mut p = Planner::<_, _, 512, 64, K>::new(
+        &mut storage,
+        Map::new(grid),
+        DiffusionTable::new(&table).unwrap(),
+        XorShiftRng::seed_from_u64(2),
+        cfg,
+        Point::new(3.0, 3.0),
+    )
+    .unwrap();
+    assert_eq!(p.set_goal(goal), Err(InputError::Unreachable));
+    // The Euclidean metric cannot tell: the goal is accepted and simply never joins.
+    let mut storage = Box::new(Storage::<512, 64>::new());
+    let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+    cfg.t_exp = Duration::from_millis(5);
+    let mut p = Planner::<_, _, 512, 64, K>::new(
+        &mut storage,
+        Map::new(grid),
+        Euclidean,
+        XorShiftRng::seed_from_u64(2),
+        cfg,
+        Point::new(3.0, 3.0),
+    )
+    .unwrap();
+    p.set_goal(goal).unwrap();
+    let clock = clock();
+    let mut last = None;
+    for _ in 0..200 {
+        let pr = p.plan(&clock, Point::new(3.0, 3.0)).unwrap();
+        assert!(!pr.goal_in_tree);
+        last = Some(pr);
+    }
+    let last = last.unwrap();
+    assert!(last.tree_full || last.nodes > 100);
+    p.tree().validate().unwrap();
+    let mut path = [Point::ZERO; 512];
+    assert!(p.path(&mut path).unwrap() >= 1);
+}
+
+#[test]
+fn a_frozen_clock_still_returns() {
+    let s = &builtin::MAZE;
+    let mut storage = Box::new(Storage::<N, B>::new());
+    let mut cfg =
+        Config::bi_am_rrt(MetricKind::Euclidean).with_rewire_mode(bi_am_rrt::RewireMode::Faithful);
+    cfg.max_expansions_per_call = 300;
+    let mut p = planner_on(&mut storage, s, Euclidean, cfg, 9);
+    p.set_goal(s.goals[0]).unwrap();
+    let frozen = FakeClock::nanos();
+    for _ in 0..5 {
+        let pr = p.plan(&frozen, s.start).unwrap();
+        assert_eq!(pr.expansions, 300);
+    }
+    assert_eq!(frozen.peek(), 0);
+}
+
+#[test]
+fn a_full_arena_is_reported_and_planning_goes_on() {
+    let s = &builtin::OPEN;
+    let mut storage = Box::new(Storage::<48, 64>::new());
+    let cfg = Config::am_rrt(MetricKind::Euclidean);
+    let mut p = planner_on(&mut storage, s, Euclidean, cfg, 3);
+    let clock = clock();
+    let mut saw_full = false;
+    let r = drive(
+        &mut p,
+        &clock,
+        s.goals[0],
+        Protocol::default(),
+        |p, _, _| {
+            saw_full |= p.tree().is_full();
+        },
+    );
+    assert!(saw_full, "the arena filled up");
+    assert!(r.reached && r.collisions == 0, "{r:?}");
+    assert_eq!(p.tree().len(), 48);
+}
