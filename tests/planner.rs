@@ -168,7 +168,7 @@ fn an_obstacle_dropped_on_the_path_is_avoided() {
         let metric = DiffusionTable::new(&table).unwrap();
         let mut p = planner_on(&mut storage, s, metric, cfg, 11);
         let clock = clock();
-        let mut dropped: Option<(Circle, usize)> = None;
+        let mut dropped: Option<(Circle, u32)> = None;
         let mut blocked_calls = Vec::new();
         let r = drive(
             &mut p,

@@ -11,7 +11,8 @@ use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::geometry::Point;
 use bi_am_rrt::map::{Circle, OccupancyGrid};
 use bi_am_rrt::metric::{ElementKind, Metric, TableHeader, write_table};
-use bi_am_rrt::{Planner, Progress};
+use bi_am_rrt::Planner;
+pub use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use rand_core::Rng;
 
 /// Free cells of the largest 8-connected component (no corner cutting), as a cell mask.
@@ -186,87 +187,21 @@ impl Metric for Geodesic<'_> {
     }
 }
 
-/// Agent protocol options.
-#[derive(Clone, Copy, Debug)]
-pub struct Protocol {
-    /// Metres the agent moves towards the waypoint per plan call.
-    pub speed: f32,
-    /// Time after the goal joined before the agent moves.
-    pub wait_s: f64,
-    /// Plan calls allowed before giving up.
-    pub max_calls: usize,
-    /// Check the tree invariants after every call.
-    pub validate: bool,
-}
-
-impl Default for Protocol {
-    fn default() -> Self {
-        Self {
-            speed: 0.7,
-            wait_s: 0.25,
-            max_calls: 2_000,
-            validate: true,
-        }
-    }
-}
-
-/// What a run measured.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct RunResult {
-    pub reached: bool,
-    pub search_ticks: Option<u64>,
-    pub travelled: f32,
-    pub collisions: usize,
-    pub calls: usize,
-    pub nodes_at_goal: Option<usize>,
-    pub last: Option<Progress>,
-}
-
-/// Drives `planner` from its root to `goal` under the protocol; `on_call` sees the planner
-/// and the agent after every call (to drop obstacles, check paths, ...).
+/// Runs the agent protocol (`bi_am_rrt::agent`), checking both trees' invariants after every
+/// call before handing over to `on_call`.
 pub fn drive<M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>(
     planner: &mut Planner<'_, '_, M, R, N, B, K>,
     clock: &FakeClock,
     goal: Point,
     proto: Protocol,
-    mut on_call: impl FnMut(&mut Planner<'_, '_, M, R, N, B, K>, Point, usize),
+    mut on_call: impl FnMut(&mut Planner<'_, '_, M, R, N, B, K>, Point, u32),
 ) -> RunResult {
-    use bi_am_rrt::clock::Clock;
-    let mut agent = planner.root_position();
-    let t0 = clock.peek();
-    planner.set_goal(goal).expect("goal accepted");
-    let mut res = RunResult::default();
-    let wait = clock.ticks(std::time::Duration::from_secs_f64(proto.wait_s));
-    for call in 0..proto.max_calls {
-        let p = planner.plan(clock, agent).expect("agent position accepted");
-        res.calls = call + 1;
-        res.last = Some(p);
-        if proto.validate {
-            planner.tree().validate().expect("forward tree invariants");
-            planner
-                .reverse_tree()
-                .validate()
-                .expect("reverse tree invariants");
-        }
-        if let Some(found) = planner.stats().goal_found_at {
-            res.search_ticks.get_or_insert(found - t0);
-            res.nodes_at_goal = planner.stats().nodes_at_goal;
-            if clock.peek() >= found + wait {
-                let step = agent.step_towards(p.waypoint, proto.speed);
-                if !planner.map().free_path(agent, step) {
-                    res.collisions += 1;
-                }
-                res.travelled += agent.dist(step);
-                agent = step;
-            }
-        }
-        on_call(planner, agent, call);
-        if p.goal_in_tree && agent.dist(goal) < 1e-3 {
-            res.reached = true;
-            break;
-        }
-    }
-    res
+    run_to_goal(planner, clock, goal, &proto, |p, agent, call| {
+        p.tree().validate().expect("forward tree invariants");
+        p.reverse_tree().validate().expect("reverse tree invariants");
+        on_call(p, agent, call)
+    })
+    .expect("goal accepted")
 }
 
 /// Whether any edge of the planner's current path meets `c`.

@@ -1,0 +1,117 @@
+//! The agent protocol of the papers' benchmarks, in the core so that the simulator, the tests
+//! and the firmware example drive a planner the same way:
+//!
+//! 1. the goal is set at time 0 (on the caller's clock);
+//! 2. `plan` is called again and again with the agent's position;
+//! 3. *search time* is the time until the goal joined the forward tree (read by the planner at
+//!    that moment, not at the end of the call);
+//! 4. the agent starts moving once the goal is in the tree and `wait` has passed, then moves
+//!    `speed` metres towards the current waypoint per call (stopping on it when closer);
+//! 5. every motion segment is checked against the map and the dynamic obstacles present: a
+//!    segment that is not free counts as a collision (the agent moves anyway, as a robot whose
+//!    planner failed would);
+//! 6. the run ends when the goal is in the tree and the agent stands on it, or after
+//!    `max_calls` calls.
+
+use core::time::Duration;
+
+use rand_core::Rng;
+
+use crate::clock::Clock;
+use crate::error::InputError;
+use crate::geometry::Point;
+use crate::metric::Metric;
+use crate::planner::{Planner, Progress};
+
+/// Parameters of the protocol.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Protocol {
+    /// Metres moved towards the waypoint per `plan` call (papers: 0.7).
+    pub speed: f32,
+    /// Time between the goal joining the tree and the agent starting (papers: 0.25 s).
+    pub wait: Duration,
+    /// Calls before the run is abandoned.
+    pub max_calls: u32,
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        Self {
+            speed: 0.7,
+            wait: Duration::from_millis(250),
+            max_calls: 3_000,
+        }
+    }
+}
+
+/// What a run measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RunResult {
+    /// The agent stood on the goal before `max_calls`.
+    pub reached: bool,
+    /// Clock ticks from setting the goal until it joined the forward tree.
+    pub search_ticks: Option<u64>,
+    /// Distance the agent travelled, in metres.
+    pub travelled: f32,
+    /// Motion segments that were not free.
+    pub collisions: u32,
+    /// `plan` calls made.
+    pub calls: u32,
+    /// Forward tree size when the goal joined.
+    pub nodes_at_goal: Option<usize>,
+    /// Cost of the tree's path to the goal when the agent started moving.
+    pub cost_at_start: Option<f32>,
+    /// The last call's report.
+    pub last: Option<Progress>,
+}
+
+/// Runs the protocol from the planner's root to `goal`. `on_call(planner, agent, call)` runs
+/// after every call (to drop obstacles, record pictures, check invariants, ...). Errors only
+/// when the goal is refused.
+pub fn run_to_goal<M, R, C, F, const N: usize, const B: usize, const K: usize>(
+    planner: &mut Planner<'_, '_, M, R, N, B, K>,
+    clock: &C,
+    goal: Point,
+    protocol: &Protocol,
+    mut on_call: F,
+) -> Result<RunResult, InputError>
+where
+    M: Metric,
+    R: Rng,
+    C: Clock + ?Sized,
+    F: FnMut(&mut Planner<'_, '_, M, R, N, B, K>, Point, u32),
+{
+    let mut agent = planner.root_position();
+    let t0 = clock.now();
+    planner.set_goal(goal)?;
+    let wait = clock.ticks(protocol.wait);
+    let mut res = RunResult::default();
+    for call in 0..protocol.max_calls {
+        let p = planner.plan(clock, agent)?;
+        res.calls = call + 1;
+        res.last = Some(p);
+        if let Some(found) = planner.stats().goal_found_at {
+            res.search_ticks.get_or_insert(found.saturating_sub(t0));
+            res.nodes_at_goal = planner.stats().nodes_at_goal;
+            if clock.now() >= found.saturating_add(wait) {
+                if res.cost_at_start.is_none() {
+                    res.cost_at_start = p.goal_cost.map(|c| c.length);
+                }
+                let step = agent.step_towards(p.waypoint, protocol.speed);
+                if !planner.map().free_path(agent, step) {
+                    res.collisions += 1;
+                }
+                res.travelled += agent.dist(step);
+                agent = step;
+            }
+        }
+        on_call(planner, agent, call);
+        if p.goal_in_tree && agent == goal {
+            res.reached = true;
+            break;
+        }
+    }
+    Ok(res)
+}
