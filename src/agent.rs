@@ -70,8 +70,8 @@ pub struct RunResult {
 /// Runs the protocol from the planner's root to `goal`. `on_call(planner, agent, call)` runs
 /// after every call (to drop obstacles, record pictures, check invariants, ...). Errors only
 /// when the goal is refused.
-pub fn run_to_goal<M, R, C, F, const N: usize, const B: usize, const K: usize>(
-    planner: &mut Planner<'_, '_, M, R, N, B, K>,
+pub fn run_to_goal<'s, 'm, M, R, C, F, const N: usize, const B: usize, const K: usize>(
+    planner: &mut Planner<'s, 'm, M, R, N, B, K>,
     clock: &C,
     goal: Point,
     protocol: &Protocol,
@@ -81,7 +81,7 @@ where
     M: Metric,
     R: Rng,
     C: Clock + ?Sized,
-    F: FnMut(&mut Planner<'_, '_, M, R, N, B, K>, Point, u32),
+    F: FnMut(&mut Planner<'s, 'm, M, R, N, B, K>, Point, u32),
 {
     let mut agent = planner.root_position();
     let t0 = clock.now();

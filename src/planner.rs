@@ -299,13 +299,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.fwd.tree.path_points(end, buf)
     }
 
-    /// One planning step of `t_exp` (module docs) for an agent at `agent`. Errors (doing
-    /// nothing) when `agent` is not finite or outside the map.
-    pub fn plan<C: Clock + ?Sized>(
-        &mut self,
-        clock: &C,
-        agent: Point,
-    ) -> Result<Progress, InputError> {
+    /// One planning step of `t_exp` (module docs) for an agent at `agent`: [`Planner::grow`],
+    /// then the root follows the agent along the path. Errors (doing nothing) when `agent` is
+    /// not finite or outside the map.
+    pub fn plan<C: Clock + ?Sized>(&mut self, clock: &C, agent: Point) -> Result<Progress, InputError> {
         if !agent.is_finite() {
             return Err(InputError::NotFinite);
         }
@@ -313,15 +310,28 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             return Err(InputError::OutOfBounds);
         }
         let meter = Meter::new(clock);
+        let expansions = self.expand_for(&meter, clock);
+        let advanced = self.follow(agent, &meter);
+        Ok(self.progress(expansions, advanced))
+    }
+
+    /// Expansion and rewiring for `t_exp` without moving the root: planning while the agent
+    /// stands still.
+    pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
+        let meter = Meter::new(clock);
+        let expansions = self.expand_for(&meter, clock);
+        self.progress(expansions, false)
+    }
+
+    fn expand_for<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) -> u32 {
         let call = Deadline::after(clock, self.cfg.t_exp);
         let mut expansions = 0;
         self.full = false;
         while expansions < self.cfg.max_expansions_per_call && !meter.expired(&call) {
-            self.step(&meter, call);
+            self.step(meter, call);
             expansions += 1;
         }
-        let advanced = self.follow(agent, &meter);
-        Ok(self.progress(expansions, advanced))
+        expansions
     }
 
     fn progress(&self, expansions: u32, advanced: bool) -> Progress {

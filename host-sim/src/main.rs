@@ -1,1 +1,230 @@
-fn main() {}
+//! `host-sim`: run the planner on a scenario, run the paper's experiment matrix, bake metric
+//! tables. `host-sim --help` lists the commands.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use bi_am_rrt::metric::ElementKind;
+use clap::{Parser, Subcommand, ValueEnum};
+use host_sim::bake;
+use host_sim::clock::ClockKind;
+use host_sim::diffusion::{Options, TableOptions};
+use host_sim::experiment::{self, ExperimentArgs, Goals};
+use host_sim::maps;
+use host_sim::run::{self, RunArgs};
+
+#[derive(Parser)]
+#[command(version, about = "Simulator and experiment runner for the Bi-AM-RRT* planner")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum MetricArg {
+    Diffusion,
+    Geodesic,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum KindArg {
+    I16,
+    F32,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Drive an agent from start to goal on one scenario and draw the result.
+    Run {
+        /// A built-in scenario (open, bug_trap, maze) ...
+        #[arg(long, default_value = "bug_trap")]
+        builtin: String,
+        /// ... or a scenario from a file (with --scenario NAME).
+        #[arg(long)]
+        scenarios: Option<PathBuf>,
+        /// Scenario name in --scenarios.
+        #[arg(long)]
+        scenario: Option<String>,
+        /// Planner name as in the paper's Table 1.
+        #[arg(long, default_value = "Bi-AM-RRT*(D)")]
+        planner: String,
+        /// Run through every goal of the scenario instead of the first only.
+        #[arg(long)]
+        all_goals: bool,
+        /// Random seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, value_enum, default_value = "wall")]
+        clock: ClockKind,
+        /// Drop a disc of this radius on the planned path once the agent moves (paper Fig. 7).
+        #[arg(long)]
+        obstacle: Option<f32>,
+        /// Output directory (picture and JSON summary).
+        #[arg(long, default_value = "out/run")]
+        out: PathBuf,
+    },
+    /// Run planners x scenarios x repeats and write runs.csv and summary.csv.
+    Experiment {
+        /// Scenario file (TOML in the form of shared/maps/scenarios.toml).
+        #[arg(long)]
+        scenarios: PathBuf,
+        /// Comma-separated scenario names (default: all in the file).
+        #[arg(long, value_delimiter = ',')]
+        maps: Option<Vec<String>>,
+        /// `all` or a comma-separated list of Table 1 names.
+        #[arg(long, default_value = "all")]
+        planners: String,
+        #[arg(long, default_value_t = 25)]
+        repeats: u32,
+        #[arg(long, value_enum, default_value = "wall")]
+        clock: ClockKind,
+        /// Goal 1 only, or the whole goal sequence.
+        #[arg(long, value_enum, default_value = "first")]
+        goals: Goals,
+        /// First seed (run r uses seed + r).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Parallel jobs (default: all cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Rewiring as the reference (every expansion spends its full t_root/t_goal).
+        #[arg(long)]
+        faithful: bool,
+        /// Planning time for the "cost after 100 ms without moving" column (ms; 0: skip).
+        #[arg(long, default_value_t = 100)]
+        anytime_ms: u64,
+        #[arg(long, default_value = "out/experiment")]
+        out: PathBuf,
+    },
+    /// Bake a metric table from a map.
+    Bake {
+        /// PNG map (mean-threshold rule), or `builtin:NAME`.
+        #[arg(long)]
+        map: String,
+        #[arg(long, value_enum, default_value = "diffusion")]
+        metric: MetricArg,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Diffusion: element type.
+        #[arg(long, value_enum, default_value = "i16")]
+        kind: KindArg,
+        /// Diffusion: map cells per table cell along each axis.
+        #[arg(long, default_value_t = 1)]
+        coarsen: u16,
+        /// Also write Rust source with a `static` table to this file.
+        #[arg(long)]
+        rust: Option<PathBuf>,
+    },
+    /// Measure wall nanoseconds per unit of planner work (to calibrate the virtual clock).
+    Calibrate {
+        #[arg(long, default_value_t = 5)]
+        repeats: u32,
+    },
+}
+
+fn load_map(spec: &str) -> Result<maps::OwnedGrid> {
+    match spec.strip_prefix("builtin:") {
+        Some(name) => Ok(maps::builtin_by_name(name)?.map),
+        None => maps::load_png(&PathBuf::from(spec)),
+    }
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run { builtin, scenarios, scenario, planner, all_goals, seed, clock, obstacle, out } => {
+            let sc = match (scenarios, scenario) {
+                (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
+                (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
+                (None, _) => maps::builtin_by_name(&builtin)?,
+            };
+            run::run(&RunArgs { scenario: sc, planner, all_goals, seed, clock, obstacle, out })
+        }
+        Command::Experiment {
+            scenarios,
+            maps: names,
+            planners,
+            repeats,
+            clock,
+            goals,
+            seed,
+            jobs,
+            faithful,
+            anytime_ms,
+            out,
+        } => {
+            let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            experiment::run(&ExperimentArgs {
+                scenarios: scs,
+                planners: experiment::parse_planners(&planners)?,
+                repeats,
+                clock,
+                goals,
+                seed,
+                jobs,
+                faithful,
+                anytime_ms,
+                out,
+            })
+        }
+        Command::Bake { map, metric, out, kind, coarsen, rust } => {
+            let grid = load_map(&map)?;
+            let t0 = Instant::now();
+            match metric {
+                MetricArg::Diffusion => {
+                    let kind = match kind {
+                        KindArg::I16 => ElementKind::I16,
+                        KindArg::F32 => ElementKind::F32,
+                    };
+                    let baked = bake::bake_diffusion(&grid, &Options::default(), &TableOptions { kind, coarsen })?;
+                    let secs = t0.elapsed().as_secs_f64();
+                    bake::write_file(&out, &baked.table)?;
+                    let r = &baked.map.report;
+                    println!(
+                        "{map}: {} nodes, {} non-zeros; graph {:.3} s, matrix {:.3} s, factor {:.3} s, \
+                         Lanczos {:.3} s ({} solves, {} restarts), t {:.3} s; total {secs:.3} s",
+                        r.nodes,
+                        r.nonzeros,
+                        r.seconds_graph,
+                        r.seconds_matrix,
+                        r.seconds_factor,
+                        r.seconds_lanczos,
+                        r.solves,
+                        r.restarts,
+                        r.seconds_t
+                    );
+                    println!("eigenvalues: {:?}", r.eigenvalues);
+                    println!(
+                        "max relative residual {:.2e}, orthogonality {:.2e}, t = {:.1}, Pearson(d_D, d_G) = {:.4}",
+                        r.residuals.iter().fold(0.0f64, |a, &b| a.max(b)),
+                        r.orthogonality,
+                        r.t,
+                        r.pearson
+                    );
+                    println!("table: {} bytes -> {}", baked.table.len(), out.display());
+                    if let Some(rs) = rust {
+                        let src = bake::rust_source("DIFFUSION_TABLE", &baked.table, &map);
+                        bake::write_file(&rs, src.as_bytes())?;
+                    }
+                }
+                MetricArg::Geodesic => {
+                    let graph = host_sim::graph::GridGraph::build(&grid.grid());
+                    let bytes = bake::graph_bytes(&graph);
+                    let secs = t0.elapsed().as_secs_f64();
+                    bake::write_file(&out, &bytes)?;
+                    println!(
+                        "{map}: geodesic graph of {} nodes, {} directed edges in {secs:.3} s; {} bytes -> {}",
+                        graph.len(),
+                        graph.edge_count(),
+                        bytes.len(),
+                        out.display()
+                    );
+                }
+            }
+            Ok(())
+        }
+        Command::Calibrate { repeats } => experiment::calibrate(repeats).context("calibrating"),
+    }
+}

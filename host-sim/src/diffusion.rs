@@ -1,0 +1,533 @@
+//! The diffusion map of a grid graph (Coifman & Lafon; Chen et al.'s use for motion planning;
+//! the AM-RRT* reference's normalisations), baked into the core's table format.
+//!
+//! 1. Kernel on the edges: `a_ij = exp(-w_ij^2 / (2 r))` (`w` in metres, `r` the cell size);
+//!    no diagonal. `D = diag(row sums)`.
+//! 2. `A1 = (A + D) / 2`, `A2 = D^-1 A1 D^-1`, `D2 = diag(row sums of A2)`,
+//!    `E = D2^-1/2 A2 D2^-1/2` (symmetric, eigenvalues in (-1, 1], the top one exactly 1).
+//! 3. The top 11 eigenpairs of `E`. Plain Lanczos on `E` would need thousands of products: the
+//!    top eigenvalues are packed against 1 (office: gaps of 3e-6). Instead: a sparse Cholesky
+//!    factorisation of `sigma I - E` (faer) with `sigma` slightly above 1, and a thick-restart
+//!    Lanczos with full reorthogonalisation on its inverse (shift-invert), where those
+//!    eigenvalues become large and well separated; the projected problems are solved by faer's
+//!    dense self-adjoint eigensolver. Final eigenvalues are Rayleigh quotients with `E`.
+//! 4. The trivial pair (lambda = 1) is dropped and 10 kept; coordinates
+//!    `n * D2^-1/2 v_k * lambda_k^t`.
+//! 5. The time scale `t` maximises the Pearson correlation between diffusion distance and graph
+//!    (Dijkstra) distance over 25 x 25 node pairs drawn with a seeded generator: a log-spaced
+//!    scan of `t` in `[1, 10^7]`, refined by golden-section search.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use bi_am_rrt::metric::{ElementKind, TableHeader, write_table, TABLE_HEADER_LEN};
+use faer::prelude::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, MatMut, Side};
+use rand_core::{Rng, SeedableRng};
+use rand_xorshift::XorShiftRng;
+
+use crate::graph::GridGraph;
+
+/// Options of the diffusion bake.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Eigenpairs computed (the top one is dropped).
+    pub eigenpairs: usize,
+    /// `sigma - 1` of the shift-invert.
+    pub shift: f64,
+    /// Relative residual at which a Ritz pair of the inverse counts as converged.
+    pub tol: f64,
+    /// Lanczos basis size.
+    pub basis: usize,
+    /// Restarts allowed.
+    pub max_restarts: usize,
+    /// Sources and targets sampled for the choice of `t` (pairs = square of this).
+    pub pairs: usize,
+    /// Seed of the start vector and of the pair sampling.
+    pub seed: u64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self { eigenpairs: 11, shift: 1e-4, tol: 1e-14, basis: 48, max_restarts: 60, pairs: 25, seed: 1 }
+    }
+}
+
+/// Timings and accuracy figures of a bake.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Report {
+    /// Nodes of the grid graph.
+    pub nodes: usize,
+    /// Non-zeros of `E` (diagonal included).
+    pub nonzeros: usize,
+    /// All eigenvalues computed, descending (the first is the trivial 1).
+    pub eigenvalues: Vec<f64>,
+    /// `||E v - lambda v|| / |lambda|` of each.
+    pub residuals: Vec<f64>,
+    /// `max |V^T V - I|`.
+    pub orthogonality: f64,
+    /// Linear solves (applications of the inverse).
+    pub solves: usize,
+    /// Lanczos restarts.
+    pub restarts: usize,
+    /// The time scale chosen.
+    pub t: f64,
+    /// Pearson correlation of diffusion and graph distances at that `t`.
+    pub pearson: f64,
+    /// Seconds: graph construction (filled by the caller), matrix, factorisation, Lanczos,
+    /// choice of `t`.
+    pub seconds_graph: f64,
+    /// Seconds building `E`.
+    pub seconds_matrix: f64,
+    /// Seconds in the Cholesky factorisation.
+    pub seconds_factor: f64,
+    /// Seconds in Lanczos.
+    pub seconds_lanczos: f64,
+    /// Seconds choosing `t`.
+    pub seconds_t: f64,
+}
+
+/// A diffusion map: 10 (or `eigenpairs - 1`) coordinates per graph node.
+#[derive(Clone, Debug)]
+pub struct DiffusionMap {
+    /// Coordinates, node-major: `coords[node * dims + k]`.
+    pub coords: Vec<f64>,
+    /// Coordinates per node.
+    pub dims: usize,
+    /// Accuracy and timing figures.
+    pub report: Report,
+}
+
+impl DiffusionMap {
+    /// The coordinates of a node.
+    pub fn node(&self, n: u32) -> &[f64] {
+        &self.coords[n as usize * self.dims..(n as usize + 1) * self.dims]
+    }
+
+    /// Diffusion distance between two nodes.
+    pub fn distance(&self, a: u32, b: u32) -> f64 {
+        self.node(a).iter().zip(self.node(b)).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+    }
+}
+
+/// `E` as CSR-like rows (column, value), diagonal included.
+struct Sym {
+    rows: Vec<Vec<(u32, f64)>>,
+}
+
+impl Sym {
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        for (yi, row) in y.iter_mut().zip(&self.rows) {
+            *yi = row.iter().map(|&(j, v)| v * x[j as usize]).sum();
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Computes the diffusion map of `graph` (module docs).
+pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> {
+    let n = graph.len();
+    let k = opts.eigenpairs;
+    if n <= k + 2 {
+        bail!("graph too small for {k} eigenpairs: {n} nodes");
+    }
+    let mut report = Report { nodes: n, ..Report::default() };
+    let t0 = Instant::now();
+    // 1-2: the normalised symmetric matrix.
+    let r = graph.cell as f64;
+    let kernel = |w_cells: f64| {
+        let w = w_cells * r;
+        (-(w * w) / (2.0 * r)).exp()
+    };
+    let d: Vec<f64> = (0..n as u32).map(|i| graph.neighbours(i).map(|(_, w)| kernel(w)).sum()).collect();
+    // A2 = D^-1 (A + D)/2 D^-1: off-diagonal a/(2 d_i d_j), diagonal 1/(2 d_i).
+    let mut rows: Vec<Vec<(u32, f64)>> = (0..n as u32)
+        .map(|i| {
+            let di = d[i as usize];
+            let mut row: Vec<(u32, f64)> =
+                graph.neighbours(i).map(|(j, w)| (j, kernel(w) / (2.0 * di * d[j as usize]))).collect();
+            row.push((i, 1.0 / (2.0 * di)));
+            row
+        })
+        .collect();
+    let d2: Vec<f64> = rows.iter().map(|row| row.iter().map(|&(_, v)| v).sum()).collect();
+    let s: Vec<f64> = d2.iter().map(|v| 1.0 / v.sqrt()).collect();
+    for (i, row) in rows.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut() {
+            *v *= s[i] * s[*j as usize];
+        }
+    }
+    let e = Sym { rows };
+    report.nonzeros = e.rows.iter().map(Vec::len).sum();
+    report.seconds_matrix = t0.elapsed().as_secs_f64();
+
+    // 3: shift-invert Lanczos.
+    let t1 = Instant::now();
+    let sigma = 1.0 + opts.shift;
+    let mut triplets = Vec::with_capacity(report.nonzeros);
+    for (i, row) in e.rows.iter().enumerate() {
+        for &(j, v) in row {
+            // Lower triangle only: the factorisation reads one side.
+            if (j as usize) <= i {
+                let val = if j as usize == i { sigma - v } else { -v };
+                triplets.push(Triplet::new(i, j as usize, val));
+            }
+        }
+    }
+    let shifted = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
+        .map_err(|e| anyhow::anyhow!("building sigma I - E: {e:?}"))?;
+    let llt = shifted.sp_cholesky(Side::Lower).map_err(|e| anyhow::anyhow!("Cholesky of sigma I - E: {e:?}"))?;
+    report.seconds_factor = t1.elapsed().as_secs_f64();
+
+    let t2 = Instant::now();
+    let mut solves = 0usize;
+    let mut apply = |x: &[f64], y: &mut [f64]| {
+        y.copy_from_slice(x);
+        llt.solve_in_place(MatMut::from_column_major_slice_mut(y, n, 1));
+        solves += 1;
+    };
+    let (vals, vecs, restarts) = lanczos_top(n, k, opts, &mut apply)?;
+    report.solves = solves;
+    report.restarts = restarts;
+    // Rayleigh quotients with E, residuals, orthogonality.
+    let mut ev = vec![0.0; n];
+    let mut pairs: Vec<(f64, Vec<f64>)> = Vec::with_capacity(k);
+    for v in vecs.into_iter().take(k) {
+        e.mul(&v, &mut ev);
+        let lambda = dot(&v, &ev) / dot(&v, &v);
+        pairs.push((lambda, v));
+    }
+    let _ = vals;
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (lambda, v) in &pairs {
+        e.mul(v, &mut ev);
+        let res: Vec<f64> = ev.iter().zip(v).map(|(a, b)| a - lambda * b).collect();
+        report.residuals.push(norm(&res) / lambda.abs().max(f64::MIN_POSITIVE));
+        report.eigenvalues.push(*lambda);
+    }
+    let mut ortho = 0.0f64;
+    for i in 0..k {
+        for j in 0..=i {
+            let target = if i == j { 1.0 } else { 0.0 };
+            ortho = ortho.max((dot(&pairs[i].1, &pairs[j].1) - target).abs());
+        }
+    }
+    report.orthogonality = ortho;
+    report.seconds_lanczos = t2.elapsed().as_secs_f64();
+
+    // 4-5: coordinates before the time scale, and the choice of t.
+    let t3 = Instant::now();
+    let dims = k - 1;
+    let kept = &pairs[1..];
+    let mut base = Vec::with_capacity(n * dims);
+    for (i, si) in s.iter().enumerate() {
+        base.extend(kept.iter().map(|(_, v)| (n as f64) * v[i] * si));
+    }
+    let lambdas: Vec<f64> = kept.iter().map(|(l, _)| *l).collect();
+    let (t, pearson) = choose_t(graph, &base, &lambdas, opts);
+    report.t = t;
+    report.pearson = pearson;
+    report.seconds_t = t3.elapsed().as_secs_f64();
+    // The lazy walk's eigenvalues are non-negative.
+    let scale: Vec<f64> = lambdas.iter().map(|l| l.max(0.0).powf(t)).collect();
+    let coords = base.chunks(dims).flat_map(|c| c.iter().zip(&scale).map(|(x, s)| x * s)).collect();
+    Ok(DiffusionMap { coords, dims, report })
+}
+
+/// Thick-restart Lanczos with full reorthogonalisation for the `k` largest eigenpairs of the
+/// symmetric operator `apply`. Returns Ritz values (descending), vectors and restarts used.
+fn lanczos_top(
+    n: usize,
+    k: usize,
+    opts: &Options,
+    apply: &mut dyn FnMut(&[f64], &mut [f64]),
+) -> Result<(Vec<f64>, Vec<Vec<f64>>, usize)> {
+    let m = opts.basis.max(2 * k + 4).min(n);
+    let keep = (k + 6).min(m - 2);
+    let mut rng = XorShiftRng::seed_from_u64(opts.seed);
+    let mut v0: Vec<f64> = (0..n).map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5).collect();
+    let nv = norm(&v0);
+    v0.iter_mut().for_each(|x| *x /= nv);
+    let mut basis: Vec<Vec<f64>> = vec![v0];
+    // Projected matrix H (symmetric), grown column by column.
+    let mut h = vec![vec![0.0f64; m + 1]; m + 1];
+    let mut w = vec![0.0; n];
+    for restart in 0..=opts.max_restarts {
+        // Expand the basis to m vectors.
+        let mut beta = 0.0;
+        for j in basis.len() - 1..m {
+            apply(&basis[j], &mut w);
+            // Two passes of classical Gram-Schmidt against the whole basis.
+            for _ in 0..2 {
+                for (i, vi) in basis.iter().enumerate() {
+                    let c = dot(vi, &w);
+                    h[i][j] += c;
+                    w.iter_mut().zip(vi).for_each(|(x, y)| *x -= c * y);
+                }
+            }
+            for i in 0..=j {
+                h[j][i] = h[i][j];
+            }
+            beta = norm(&w);
+            if j + 1 < m {
+                if beta <= 1e-300 {
+                    bail!("Lanczos breakdown at step {j}");
+                }
+                basis.push(w.iter().map(|x| x / beta).collect());
+            }
+        }
+        // Ritz pairs of the projected matrix.
+        let hm = Mat::<f64>::from_fn(m, m, |i, j| h[i][j]);
+        let eig = hm.self_adjoint_eigen(Side::Lower).map_err(|e| anyhow::anyhow!("projected eigenproblem: {e:?}"))?;
+        let (theta, y) = (eig.S().column_vector(), eig.U());
+        // Descending order.
+        let order: Vec<usize> = (0..m).rev().collect();
+        let converged = order.iter().take(k).all(|&c| (beta * y[(m - 1, c)]).abs() <= opts.tol * theta[c].abs());
+        let take = if converged { k } else { keep };
+        let ritz: Vec<Vec<f64>> = order
+            .iter()
+            .take(take)
+            .map(|&c| {
+                let mut u = vec![0.0; n];
+                for (i, vi) in basis.iter().enumerate() {
+                    let yi = y[(i, c)];
+                    u.iter_mut().zip(vi).for_each(|(x, v)| *x += yi * v);
+                }
+                u
+            })
+            .collect();
+        if converged || restart == opts.max_restarts {
+            if !converged {
+                bail!("Lanczos did not converge in {} restarts", opts.max_restarts);
+            }
+            let vals = order.iter().take(k).map(|&c| theta[c]).collect();
+            return Ok((vals, ritz, restart));
+        }
+        // Thick restart: the kept Ritz vectors (H becomes their Ritz values on the diagonal),
+        // then the residual direction. The arrow entries coupling them to the residual are
+        // recomputed by the Gram-Schmidt inner products of the next expansion step.
+        let residual: Vec<f64> = w.iter().map(|x| x / beta).collect();
+        for row in h.iter_mut() {
+            row.iter_mut().for_each(|x| *x = 0.0);
+        }
+        for (i, &c) in order.iter().take(keep).enumerate() {
+            h[i][i] = theta[c];
+        }
+        basis = ritz;
+        basis.push(residual);
+    }
+    unreachable!("the loop returns at its last restart")
+}
+
+/// Chooses `t` maximising the Pearson correlation of diffusion and graph distances.
+fn choose_t(graph: &GridGraph, base: &[f64], lambdas: &[f64], opts: &Options) -> (f64, f64) {
+    let n = graph.len();
+    let dims = lambdas.len();
+    let mut rng = XorShiftRng::seed_from_u64(opts.seed ^ 0x5eed);
+    let mut pick = || (rng.next_u64() % n as u64) as u32;
+    let sources: Vec<u32> = (0..opts.pairs).map(|_| pick()).collect();
+    let targets: Vec<u32> = (0..opts.pairs).map(|_| pick()).collect();
+    let mut dist = Vec::new();
+    let mut geo = Vec::new();
+    let mut diffs = Vec::new(); // squared coordinate differences per pair
+    for &s in &sources {
+        graph.dijkstra(s, &mut dist);
+        for &t in &targets {
+            if s == t {
+                continue;
+            }
+            geo.push(dist[t as usize] * graph.cell as f64);
+            let (a, b) = (&base[s as usize * dims..][..dims], &base[t as usize * dims..][..dims]);
+            diffs.push(a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).collect::<Vec<f64>>());
+        }
+    }
+    let logs: Vec<f64> = lambdas.iter().map(|l| l.max(f64::MIN_POSITIVE).ln()).collect();
+    let pearson_at = |log10_t: f64| {
+        let t = 10f64.powf(log10_t);
+        let w: Vec<f64> = logs.iter().map(|l| (2.0 * t * l).exp()).collect();
+        let dd: Vec<f64> = diffs.iter().map(|d| d.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>().sqrt()).collect();
+        pearson(&dd, &geo)
+    };
+    let mut best = (0.0, f64::NEG_INFINITY);
+    let steps = 350;
+    for i in 0..=steps {
+        let x = 7.0 * i as f64 / steps as f64;
+        let p = pearson_at(x);
+        if p > best.1 {
+            best = (x, p);
+        }
+    }
+    // Golden-section refinement around the best grid point.
+    let h = 7.0 / steps as f64;
+    let (mut lo, mut hi) = ((best.0 - h).max(0.0), (best.0 + h).min(7.0));
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..40 {
+        let (a, b) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        if pearson_at(a) > pearson_at(b) {
+            hi = b;
+        } else {
+            lo = a;
+        }
+    }
+    let x = 0.5 * (lo + hi);
+    let p = pearson_at(x);
+    if p > best.1 { (10f64.powf(x), p) } else { (10f64.powf(best.0), best.1) }
+}
+
+/// Pearson correlation of two samples.
+pub fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()) as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    if saa == 0.0 || sbb == 0.0 { 0.0 } else { sab / (saa * sbb).sqrt() }
+}
+
+/// Table layout options.
+#[derive(Clone, Copy, Debug)]
+pub struct TableOptions {
+    /// Element encoding.
+    pub kind: ElementKind,
+    /// Map cells per table cell along each axis (1: full resolution).
+    pub coarsen: u16,
+}
+
+impl Default for TableOptions {
+    fn default() -> Self {
+        Self { kind: ElementKind::I16, coarsen: 1 }
+    }
+}
+
+/// Writes the table of a diffusion map. With `coarsen > 1`, a table cell takes the
+/// coordinates of the graph node nearest its centre among the map cells it covers.
+pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -> Result<Vec<u8>> {
+    let c = opts.coarsen.max(1) as u32;
+    let cols = graph.cols.div_ceil(c) as u16;
+    let rows = graph.rows.div_ceil(c) as u16;
+    let max_abs = map.coords.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale = match opts.kind {
+        ElementKind::I16 => (max_abs / 32767.0).max(f64::MIN_POSITIVE) as f32,
+        ElementKind::F32 => 1.0,
+    };
+    let header = TableHeader {
+        kind: opts.kind,
+        dims: map.dims as u16,
+        cols,
+        rows,
+        cell_size: graph.cell * c as f32,
+        scale,
+    };
+    let mut out = vec![0u8; TABLE_HEADER_LEN + header.payload_len()];
+    let written = write_table(&header, &mut out, |tc, tr, coords| {
+        let node = representative(graph, tc as u32, tr as u32, c);
+        match node {
+            Some(nd) => {
+                for (slot, v) in coords.iter_mut().zip(map.node(nd)) {
+                    *slot = *v as f32;
+                }
+                true
+            }
+            None => false,
+        }
+    })
+    .context("writing the table")?;
+    out.truncate(written);
+    Ok(out)
+}
+
+/// The node of the block of `c x c` map cells at table cell `(tc, tr)` nearest its centre.
+fn representative(graph: &GridGraph, tc: u32, tr: u32, c: u32) -> Option<u32> {
+    let centre = ((tc * c) as f64 + c as f64 / 2.0, (tr * c) as f64 + c as f64 / 2.0);
+    let mut best: Option<(f64, u32)> = None;
+    for r in tr * c..((tr + 1) * c).min(graph.rows) {
+        for col in tc * c..((tc + 1) * c).min(graph.cols) {
+            let node = graph.node_of_cell[(r * graph.cols + col) as usize];
+            if node == u32::MAX {
+                continue;
+            }
+            let d = (col as f64 + 0.5 - centre.0).powi(2) + (r as f64 + 0.5 - centre.1).powi(2);
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, node));
+            }
+        }
+    }
+    best.map(|(_, n)| n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::maps::OwnedGrid;
+
+    /// The eigenvalues against faer's dense solver on a small map.
+    #[test]
+    fn matches_a_dense_eigensolver() {
+        let g = OwnedGrid::from_fn(16, 14, 1.0, |c, r| (c == 7 && r < 10) || (r == 5 && c > 10)).unwrap();
+        let graph = GridGraph::build(&g.grid());
+        let n = graph.len();
+        let map = diffusion_map(&graph, &Options::default()).unwrap();
+        let rep = &map.report;
+        assert!(rep.orthogonality < 1e-12, "{}", rep.orthogonality);
+        assert!(rep.residuals.iter().all(|&r| r < 1e-10), "{:?}", rep.residuals);
+        // Dense E, built independently from the definition.
+        let kernel = |w: f64| (-(w * w) / 2.0).exp();
+        let mut a = Mat::<f64>::zeros(n, n);
+        for i in 0..n as u32 {
+            for (j, w) in graph.neighbours(i) {
+                a[(i as usize, j as usize)] = kernel(w);
+            }
+        }
+        let d: Vec<f64> = (0..n).map(|i| (0..n).map(|j| a[(i, j)]).sum()).collect();
+        let a2 = Mat::<f64>::from_fn(n, n, |i, j| {
+            let a1 = 0.5 * a[(i, j)] + if i == j { 0.5 * d[i] } else { 0.0 };
+            a1 / (d[i] * d[j])
+        });
+        let d2: Vec<f64> = (0..n).map(|i| (0..n).map(|j| a2[(i, j)]).sum()).collect();
+        let e = Mat::<f64>::from_fn(n, n, |i, j| a2[(i, j)] / (d2[i] * d2[j]).sqrt());
+        let dense = e.self_adjoint_eigenvalues(Side::Lower).unwrap();
+        let top: Vec<f64> = dense.iter().rev().take(11).copied().collect();
+        assert!((top[0] - 1.0).abs() < 1e-12);
+        for (x, y) in rep.eigenvalues.iter().zip(&top) {
+            assert!((x - y).abs() < 1e-12, "{x} vs {y}");
+        }
+        assert!(rep.pearson > 0.5, "pearson {}", rep.pearson);
+        assert_eq!(map.dims, 10);
+    }
+
+    #[test]
+    fn table_round_trip_and_quantisation_bound() {
+        let g = OwnedGrid::from_fn(20, 20, 1.0, |c, r| c == 10 && r > 3).unwrap();
+        let graph = GridGraph::build(&g.grid());
+        let map = diffusion_map(&graph, &Options::default()).unwrap();
+        let full = table_bytes(&graph, &map, &TableOptions { kind: ElementKind::F32, coarsen: 1 }).unwrap();
+        let q = table_bytes(&graph, &map, &TableOptions::default()).unwrap();
+        let (tf, tq) = (
+            bi_am_rrt::DiffusionTable::new(&full).unwrap(),
+            bi_am_rrt::DiffusionTable::new(&q).unwrap(),
+        );
+        use bi_am_rrt::Metric;
+        let bound = (map.dims as f32).sqrt() * tq.header().scale;
+        for a in 0..graph.len() as u32 {
+            for b in (0..graph.len() as u32).step_by(7) {
+                let (pa, pb) = (graph.position(a), graph.position(b));
+                let exact = map.distance(a, b) as f32;
+                assert!((tf.distance(pa, pb) - exact).abs() <= 1e-4 * exact.max(1.0));
+                assert!((tq.distance(pa, pb) - exact).abs() <= bound + 1e-4 * exact, "{a} {b}");
+            }
+        }
+        // Cells off the graph are unreachable.
+        assert_eq!(tq.distance(bi_am_rrt::Point::new(10.5, 10.5), graph.position(0)), f32::INFINITY);
+    }
+}

@@ -1,0 +1,349 @@
+//! The experiment runner: planners x scenarios x repeats under the agent protocol, in parallel
+//! on all cores, written to `runs.csv` (one row per run and goal) and `summary.csv` (medians
+//! per planner, scenario and goal).
+//!
+//! Per run (seed = first seed + repeat index, the same seeds for every planner):
+//! - the goal sequence (goal 1, or all goals) is driven under `bi_am_rrt::agent`'s protocol;
+//! - with `--anytime-ms`, a second planner with the same seed plans towards goal 1 without
+//!   moving for that long, and the cost of its path to the goal is recorded (the paper does
+//!   not report this; the issue asks for it).
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use bi_am_rrt::agent::Protocol;
+use bi_am_rrt::clock::Clock;
+use bi_am_rrt::{Config, RewireMode};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
+use crate::maps::Scenario;
+use crate::sim::{Prepared, drive, with_planner};
+
+/// Which goals a run drives through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Goals {
+    /// Start to goal 1 (the Bi-AM-RRT* paper's static experiment).
+    First,
+    /// The whole sequence (the AM-RRT* paper's benchmark).
+    All,
+}
+
+/// Everything the runner needs.
+pub struct ExperimentArgs {
+    /// Scenarios to run.
+    pub scenarios: Vec<Scenario>,
+    /// Planner configurations (Table 1 names).
+    pub planners: Vec<Config>,
+    /// Runs per planner and scenario.
+    pub repeats: u32,
+    /// Clock.
+    pub clock: ClockKind,
+    /// Goals.
+    pub goals: Goals,
+    /// First seed.
+    pub seed: u64,
+    /// Parallel jobs.
+    pub jobs: Option<usize>,
+    /// Reference-style rewiring budgets.
+    pub faithful: bool,
+    /// Anytime measurement budget in ms (0: none).
+    pub anytime_ms: u64,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+/// `all` or a comma-separated list of Table 1 names.
+pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
+    if spec == "all" {
+        return Ok(Config::table1().to_vec());
+    }
+    spec.split(',')
+        .map(|name| {
+            let name = name.trim();
+            Config::from_name(name).with_context(|| {
+                let all: Vec<String> = Config::table1().iter().map(|c| c.name().to_string()).collect();
+                format!("unknown planner {name:?}; Table 1 names are {}", all.join(", "))
+            })
+        })
+        .collect()
+}
+
+/// One row of `runs.csv`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub planner: String,
+    pub scenario: String,
+    pub goal_index: usize,
+    pub seed: u64,
+    pub reached: bool,
+    pub search_time_s: Option<f64>,
+    pub path_length_m: f32,
+    pub collisions: u32,
+    pub nodes_at_goal: Option<usize>,
+    pub calls: u32,
+    pub cost_at_start_m: Option<f32>,
+    pub anytime_cost_m: Option<f32>,
+    pub final_nodes: usize,
+    pub clock: ClockKind,
+    pub run_wall_s: f64,
+}
+
+/// One row of `summary.csv`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub planner: String,
+    pub scenario: String,
+    pub goal_index: usize,
+    pub runs: usize,
+    pub reached: usize,
+    pub collisions: u32,
+    pub search_time_median_s: Option<f64>,
+    pub search_time_mean_s: Option<f64>,
+    pub path_length_median_m: Option<f64>,
+    pub path_length_mean_m: Option<f64>,
+    pub nodes_at_goal_median: Option<f64>,
+    pub anytime_cost_median_m: Option<f64>,
+}
+
+/// Median of a sample (`None` if empty).
+pub fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// Runs one planner on one scenario with one seed and returns its rows.
+pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -> Result<Vec<Row>> {
+    let wall = Instant::now();
+    let goals: Vec<usize> = match args.goals {
+        Goals::First => vec![0],
+        Goals::All => (0..prep.scenario.goals.len()).collect(),
+    };
+    let protocol = Protocol::default();
+    let (runs, final_nodes) = with_planner(prep, cfg, seed, |p| {
+        let runs = match args.clock {
+            ClockKind::Wall => drive(p, prep, &WallClock::new(), &goals, &protocol, |_, _, _, _| {})?,
+            ClockKind::Virtual => {
+                drive(p, prep, &virtual_clock(VIRTUAL_NS_PER_UNIT), &goals, &protocol, |_, _, _, _| {})?
+            }
+        };
+        Ok((runs, p.tree().len()))
+    })?;
+    let anytime = if args.anytime_ms > 0 {
+        let mut c = cfg;
+        c.t_exp = Duration::from_millis(args.anytime_ms);
+        with_planner(prep, c, seed, |p| {
+            p.set_goal(prep.scenario.goals[0]).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let progress = match args.clock {
+                ClockKind::Wall => p.grow(&WallClock::new()),
+                ClockKind::Virtual => p.grow(&virtual_clock(VIRTUAL_NS_PER_UNIT)),
+            };
+            Ok(progress.goal_cost.filter(|c| !c.blocked).map(|c| c.length))
+        })?
+    } else {
+        None
+    };
+    let run_wall_s = wall.elapsed().as_secs_f64();
+    Ok(runs
+        .into_iter()
+        .map(|g| Row {
+            planner: cfg.name().to_string(),
+            scenario: prep.scenario.name.clone(),
+            goal_index: g.goal_index + 1,
+            seed,
+            reached: g.result.reached,
+            search_time_s: g.search_s,
+            path_length_m: g.result.travelled,
+            collisions: g.result.collisions,
+            nodes_at_goal: g.result.nodes_at_goal,
+            calls: g.result.calls,
+            cost_at_start_m: g.result.cost_at_start,
+            anytime_cost_m: if g.goal_index == 0 { anytime } else { None },
+            final_nodes,
+            clock: args.clock,
+            run_wall_s,
+        })
+        .collect())
+}
+
+/// Groups rows by planner, scenario and goal, in first-seen order.
+pub fn summarise(rows: &[Row]) -> Vec<Summary> {
+    let mut keys: Vec<(String, String, usize)> = Vec::new();
+    for r in rows {
+        let k = (r.planner.clone(), r.scenario.clone(), r.goal_index);
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys.into_iter()
+        .map(|(planner, scenario, goal_index)| {
+            let group: Vec<&Row> = rows
+                .iter()
+                .filter(|r| r.planner == planner && r.scenario == scenario && r.goal_index == goal_index)
+                .collect();
+            let reached: Vec<&&Row> = group.iter().filter(|r| r.reached).collect();
+            let mut search: Vec<f64> = group.iter().filter_map(|r| r.search_time_s).collect();
+            let mut len: Vec<f64> = reached.iter().map(|r| r.path_length_m as f64).collect();
+            let mut nodes: Vec<f64> = group.iter().filter_map(|r| r.nodes_at_goal.map(|n| n as f64)).collect();
+            let mut any: Vec<f64> = group.iter().filter_map(|r| r.anytime_cost_m.map(|c| c as f64)).collect();
+            Summary {
+                runs: group.len(),
+                reached: reached.len(),
+                collisions: group.iter().map(|r| r.collisions).sum(),
+                search_time_mean_s: mean(&search),
+                search_time_median_s: median(&mut search),
+                path_length_mean_m: mean(&len),
+                path_length_median_m: median(&mut len),
+                nodes_at_goal_median: median(&mut nodes),
+                anytime_cost_median_m: median(&mut any),
+                planner,
+                scenario,
+                goal_index,
+            }
+        })
+        .collect()
+}
+
+fn fmt_opt(v: Option<f64>, scale: f64, prec: usize) -> String {
+    v.map_or_else(|| "-".into(), |x| format!("{:.*}", prec, x * scale))
+}
+
+/// Runs the experiment and writes its files.
+pub fn run(args: &ExperimentArgs) -> Result<()> {
+    if args.scenarios.is_empty() || args.planners.is_empty() {
+        bail!("nothing to run");
+    }
+    let mut planners = args.planners.clone();
+    if args.faithful {
+        planners.iter_mut().for_each(|c| c.rewire_mode = RewireMode::Faithful);
+    }
+    std::fs::create_dir_all(&args.out)?;
+    let jobs = args.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).stack_size(32 << 20).build()?;
+    let preps: Vec<Prepared> = args.scenarios.iter().cloned().map(Prepared::new).collect();
+    // Bake what the planners need before timing anything.
+    let needs_d = planners.iter().any(|c| c.metric == bi_am_rrt::MetricKind::Diffusion);
+    pool.install(|| {
+        preps.par_iter().try_for_each(|p| -> Result<()> {
+            if needs_d {
+                p.diffusion()?;
+            }
+            p.graph();
+            Ok(())
+        })
+    })?;
+    for p in &preps {
+        if let Some(s) = p.bake_seconds.get() {
+            eprintln!("{}: diffusion table baked in {s:.3} s", p.scenario.name);
+        }
+    }
+    let mut jobs_list = Vec::new();
+    for (si, _) in preps.iter().enumerate() {
+        for cfg in &planners {
+            for r in 0..args.repeats {
+                jobs_list.push((si, *cfg, args.seed + r as u64));
+            }
+        }
+    }
+    let bar = ProgressBar::new(jobs_list.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let rows = Mutex::new(Vec::new());
+    let result: Result<()> = pool.install(|| {
+        jobs_list.par_iter().try_for_each(|&(si, cfg, seed)| {
+            let r = one_run(&preps[si], cfg, seed, args)
+                .with_context(|| format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name))?;
+            rows.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.extend(r);
+            bar.inc(1);
+            Ok(())
+        })
+    });
+    bar.finish();
+    result?;
+    let mut rows = rows.into_inner().map_err(|_| anyhow::anyhow!("poisoned"))?;
+    // Deterministic file order whatever the scheduling.
+    let order = |r: &Row| {
+        (
+            preps.iter().position(|p| p.scenario.name == r.scenario),
+            planners.iter().position(|c| c.name().to_string() == r.planner),
+            r.seed,
+            r.goal_index,
+        )
+    };
+    rows.sort_by_key(order);
+    let mut w = csv::Writer::from_path(args.out.join("runs.csv"))?;
+    for r in &rows {
+        w.serialize(r)?;
+    }
+    w.flush()?;
+    let summary = summarise(&rows);
+    let mut w = csv::Writer::from_path(args.out.join("summary.csv"))?;
+    for s in &summary {
+        w.serialize(s)?;
+    }
+    w.flush()?;
+    println!(
+        "{:<16} {:<10} {:>4} {:>8} {:>5} {:>12} {:>12} {:>10} {:>10} {:>9}",
+        "planner", "scenario", "goal", "reached", "coll", "search med", "search mean", "len med", "len mean", "nodes@g"
+    );
+    for s in &summary {
+        println!(
+            "{:<16} {:<10} {:>4} {:>5}/{:<2} {:>5} {:>10} ms {:>9} ms {:>8} m {:>8} m {:>9}",
+            s.planner,
+            s.scenario,
+            s.goal_index,
+            s.reached,
+            s.runs,
+            s.collisions,
+            fmt_opt(s.search_time_median_s, 1e3, 2),
+            fmt_opt(s.search_time_mean_s, 1e3, 2),
+            fmt_opt(s.path_length_median_m, 1.0, 2),
+            fmt_opt(s.path_length_mean_m, 1.0, 2),
+            fmt_opt(s.nodes_at_goal_median, 1.0, 0),
+        );
+    }
+    println!("wrote {} and {}", args.out.join("runs.csv").display(), args.out.join("summary.csv").display());
+    Ok(())
+}
+
+/// Measures wall nanoseconds per unit of planner work over a few built-in runs.
+pub fn calibrate(repeats: u32) -> Result<()> {
+    let preps: Vec<Prepared> = crate::maps::builtin_scenarios().into_iter().map(Prepared::new).collect();
+    let mut ratios = Vec::new();
+    for prep in &preps {
+        for name in ["Bi-AM-RRT*(D)", "AM-RRT*(E)", "RT-RRT*"] {
+            let cfg = Config::from_name(name).context("planner")?;
+            for seed in 1..=repeats as u64 {
+                let clock = WallClock::new();
+                let t0 = clock.now();
+                with_planner(prep, cfg, seed, |p| {
+                    drive(p, prep, &clock, &[0], &Protocol::default(), |_, _, _, _| {}).map(|_| ())
+                })?;
+                let ns = (clock.now() - t0) as f64;
+                ratios.push(ns / clock.work().max(1) as f64);
+            }
+        }
+    }
+    let m = median(&mut ratios).unwrap_or(0.0);
+    println!(
+        "wall ns per work unit: median {m:.2} over {} runs (min {:.2}, max {:.2}); the virtual clock uses {VIRTUAL_NS_PER_UNIT}",
+        ratios.len(),
+        ratios.first().copied().unwrap_or(0.0),
+        ratios.last().copied().unwrap_or(0.0)
+    );
+    Ok(())
+}

@@ -1,0 +1,136 @@
+//! What every simulation shares: a scenario prepared for all metrics (grid graph, diffusion
+//! table), the planner type of the simulator, and one planner run through a goal sequence
+//! under the agent protocol of the core (`bi_am_rrt::agent`).
+
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
+
+use anyhow::{Result, anyhow};
+use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
+use bi_am_rrt::clock::Clock;
+use bi_am_rrt::metric::DiffusionTable;
+use bi_am_rrt::{Config, Map, MetricKind, Planner, Storage};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+use crate::bake::{Baked, bake_diffusion};
+use crate::diffusion::{Options, TableOptions};
+use crate::graph::GridGraph;
+use crate::maps::Scenario;
+use crate::metrics::{AnyMetric, Geodesic};
+
+/// Nodes per tree in the simulator (office needs several thousand).
+pub const NODES: usize = 8192;
+/// Spatial-index buckets per tree (5 m buckets cover a 200 m map).
+pub const BUCKETS: usize = 2048;
+/// Dynamic obstacles at most.
+pub const OBSTACLES: usize = 8;
+/// Geodesic field cache per run, in bytes.
+pub const GEODESIC_CACHE_BYTES: usize = 192 << 20;
+
+/// The simulator's planner type.
+pub type SimPlanner<'s, 't> = Planner<'s, 't, AnyMetric<'t>, XorShiftRng, NODES, BUCKETS, OBSTACLES>;
+
+/// A scenario with its metric data, computed on first use and shared by all runs.
+pub struct Prepared {
+    /// The scenario.
+    pub scenario: Scenario,
+    graph: OnceLock<Arc<GridGraph>>,
+    diffusion: OnceLock<Result<Baked, String>>,
+    /// Seconds the diffusion bake took (once done).
+    pub bake_seconds: OnceLock<f64>,
+}
+
+impl Prepared {
+    /// Wraps a scenario; nothing is computed yet.
+    pub fn new(scenario: Scenario) -> Self {
+        Self { scenario, graph: OnceLock::new(), diffusion: OnceLock::new(), bake_seconds: OnceLock::new() }
+    }
+
+    /// The grid graph (for the geodesic metric).
+    pub fn graph(&self) -> Arc<GridGraph> {
+        self.graph.get_or_init(|| Arc::new(GridGraph::build(&self.scenario.map.grid()))).clone()
+    }
+
+    /// The baked diffusion table (default options: i16, full resolution).
+    pub fn diffusion(&self) -> Result<&Baked> {
+        self.diffusion
+            .get_or_init(|| {
+                let t0 = Instant::now();
+                let r = bake_diffusion(&self.scenario.map, &Options::default(), &TableOptions::default())
+                    .map_err(|e| format!("{e:#}"));
+                let _ = self.bake_seconds.set(t0.elapsed().as_secs_f64());
+                r
+            })
+            .as_ref()
+            .map_err(|e| anyhow!("diffusion bake of {}: {e}", self.scenario.name))
+    }
+
+    /// The metric a configuration asks for.
+    pub fn metric(&self, kind: MetricKind) -> Result<AnyMetric<'_>> {
+        Ok(match kind {
+            MetricKind::Euclidean => AnyMetric::Euclidean,
+            MetricKind::Diffusion => AnyMetric::Diffusion(
+                DiffusionTable::new(&self.diffusion()?.table).map_err(|e| anyhow!("table: {e}"))?,
+            ),
+            MetricKind::Geodesic => {
+                AnyMetric::Geodesic(Geodesic::with_cache_bytes(self.graph(), GEODESIC_CACHE_BYTES))
+            }
+        })
+    }
+
+    /// The configuration for this scenario: the named planner with the scenario's `sigma`.
+    pub fn config(&self, base: Config) -> Config {
+        base.with_sigma(self.scenario.sigma)
+    }
+}
+
+/// Builds a planner for `prep` and hands it to `f`.
+pub fn with_planner<T>(
+    prep: &Prepared,
+    cfg: Config,
+    seed: u64,
+    f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
+) -> Result<T> {
+    let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
+    let metric = prep.metric(cfg.metric)?;
+    let map = Map::new(prep.scenario.map.grid());
+    let rng = XorShiftRng::seed_from_u64(seed);
+    let mut planner = Planner::new(&mut storage, map, metric, rng, prep.config(cfg), prep.scenario.start)
+        .map_err(|e| anyhow!("start of {}: {e}", prep.scenario.name))?;
+    f(&mut planner)
+}
+
+/// One goal of a run.
+#[derive(Clone, Copy, Debug)]
+pub struct GoalRun {
+    /// Index in the scenario's goal list.
+    pub goal_index: usize,
+    /// The protocol's measurements.
+    pub result: RunResult,
+    /// Search time in seconds on the run's clock.
+    pub search_s: Option<f64>,
+}
+
+/// Drives `planner` through `goals` (indices into the scenario's goals) in order.
+pub fn drive<'s, 't, C: Clock + ?Sized>(
+    planner: &mut SimPlanner<'s, 't>,
+    prep: &Prepared,
+    clock: &C,
+    goals: &[usize],
+    protocol: &Protocol,
+    mut on_call: impl FnMut(&mut SimPlanner<'s, 't>, usize, bi_am_rrt::Point, u32),
+) -> Result<Vec<GoalRun>> {
+    let mut out = Vec::new();
+    for &gi in goals {
+        let goal = prep.scenario.goals[gi];
+        let result = run_to_goal(planner, clock, goal, protocol, |p, a, c| on_call(p, gi, a, c))
+            .map_err(|e| anyhow!("goal {gi} of {}: {e}", prep.scenario.name))?;
+        let search_s = result.search_ticks.map(|t| t as f64 / clock.ticks_per_second() as f64);
+        out.push(GoalRun { goal_index: gi, result, search_s });
+        if !result.reached {
+            break;
+        }
+    }
+    Ok(out)
+}
