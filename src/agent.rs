@@ -11,7 +11,7 @@
 //!    segment that is not free counts as a collision (the agent moves anyway, as a robot whose
 //!    planner failed would);
 //! 6. the run ends when the goal is in the tree and the agent stands on it, or after
-//!    `max_calls` calls.
+//!    `max_calls` calls (or, with `stop_when_found`, once the goal has joined the tree).
 
 use core::time::Duration;
 
@@ -33,6 +33,8 @@ pub struct Protocol {
     pub wait: Duration,
     /// Calls before the run is abandoned.
     pub max_calls: u32,
+    /// End the run after the call in which the goal joined the tree (search time only).
+    pub stop_when_found: bool,
 }
 
 impl Default for Protocol {
@@ -41,6 +43,7 @@ impl Default for Protocol {
             speed: 0.7,
             wait: Duration::from_millis(250),
             max_calls: 3_000,
+            stop_when_found: false,
         }
     }
 }
@@ -108,6 +111,9 @@ where
             }
         }
         on_call(planner, agent, call);
+        if protocol.stop_when_found && res.search_ticks.is_some() {
+            break;
+        }
         if p.goal_in_tree && agent == goal {
             res.reached = true;
             break;

@@ -93,3 +93,8 @@ pub use geometry::Point;
 pub use map::{Circle, Map, OccupancyGrid};
 pub use metric::{DiffusionTable, Euclidean, Metric};
 pub use planner::{Planner, Progress, Stats, Storage};
+
+/// The README's example is compiled and run by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

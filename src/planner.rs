@@ -302,7 +302,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// One planning step of `t_exp` (module docs) for an agent at `agent`: [`Planner::grow`],
     /// then the root follows the agent along the path. Errors (doing nothing) when `agent` is
     /// not finite or outside the map.
-    pub fn plan<C: Clock + ?Sized>(&mut self, clock: &C, agent: Point) -> Result<Progress, InputError> {
+    pub fn plan<C: Clock + ?Sized>(
+        &mut self,
+        clock: &C,
+        agent: Point,
+    ) -> Result<Progress, InputError> {
         if !agent.is_finite() {
             return Err(InputError::NotFinite);
         }

@@ -30,7 +30,10 @@ impl Default for WallClock {
 impl WallClock {
     /// A clock starting now.
     pub fn new() -> Self {
-        Self { start: Instant::now(), work: Cell::new(0) }
+        Self {
+            start: Instant::now(),
+            work: Cell::new(0),
+        }
     }
 
     /// Work units reported so far.

@@ -20,7 +20,7 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use bi_am_rrt::metric::{ElementKind, TableHeader, write_table, TABLE_HEADER_LEN};
+use bi_am_rrt::metric::{ElementKind, TABLE_HEADER_LEN, TableHeader, write_table};
 use faer::prelude::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, MatMut, Side};
@@ -50,7 +50,15 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Self { eigenpairs: 11, shift: 1e-4, tol: 1e-14, basis: 48, max_restarts: 60, pairs: 25, seed: 1 }
+        Self {
+            eigenpairs: 11,
+            shift: 1e-4,
+            tol: 1e-14,
+            basis: 48,
+            max_restarts: 60,
+            pairs: 25,
+            seed: 1,
+        }
     }
 }
 
@@ -107,7 +115,12 @@ impl DiffusionMap {
 
     /// Diffusion distance between two nodes.
     pub fn distance(&self, a: u32, b: u32) -> f64 {
-        self.node(a).iter().zip(self.node(b)).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+        self.node(a)
+            .iter()
+            .zip(self.node(b))
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f64>()
+            .sqrt()
     }
 }
 
@@ -139,7 +152,10 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
     if n <= k + 2 {
         bail!("graph too small for {k} eigenpairs: {n} nodes");
     }
-    let mut report = Report { nodes: n, ..Report::default() };
+    let mut report = Report {
+        nodes: n,
+        ..Report::default()
+    };
     let t0 = Instant::now();
     // 1-2: the normalised symmetric matrix.
     let r = graph.cell as f64;
@@ -147,18 +163,25 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
         let w = w_cells * r;
         (-(w * w) / (2.0 * r)).exp()
     };
-    let d: Vec<f64> = (0..n as u32).map(|i| graph.neighbours(i).map(|(_, w)| kernel(w)).sum()).collect();
+    let d: Vec<f64> = (0..n as u32)
+        .map(|i| graph.neighbours(i).map(|(_, w)| kernel(w)).sum())
+        .collect();
     // A2 = D^-1 (A + D)/2 D^-1: off-diagonal a/(2 d_i d_j), diagonal 1/(2 d_i).
     let mut rows: Vec<Vec<(u32, f64)>> = (0..n as u32)
         .map(|i| {
             let di = d[i as usize];
-            let mut row: Vec<(u32, f64)> =
-                graph.neighbours(i).map(|(j, w)| (j, kernel(w) / (2.0 * di * d[j as usize]))).collect();
+            let mut row: Vec<(u32, f64)> = graph
+                .neighbours(i)
+                .map(|(j, w)| (j, kernel(w) / (2.0 * di * d[j as usize])))
+                .collect();
             row.push((i, 1.0 / (2.0 * di)));
             row
         })
         .collect();
-    let d2: Vec<f64> = rows.iter().map(|row| row.iter().map(|&(_, v)| v).sum()).collect();
+    let d2: Vec<f64> = rows
+        .iter()
+        .map(|row| row.iter().map(|&(_, v)| v).sum())
+        .collect();
     let s: Vec<f64> = d2.iter().map(|v| 1.0 / v.sqrt()).collect();
     for (i, row) in rows.iter_mut().enumerate() {
         for (j, v) in row.iter_mut() {
@@ -184,7 +207,9 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
     }
     let shifted = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
         .map_err(|e| anyhow::anyhow!("building sigma I - E: {e:?}"))?;
-    let llt = shifted.sp_cholesky(Side::Lower).map_err(|e| anyhow::anyhow!("Cholesky of sigma I - E: {e:?}"))?;
+    let llt = shifted
+        .sp_cholesky(Side::Lower)
+        .map_err(|e| anyhow::anyhow!("Cholesky of sigma I - E: {e:?}"))?;
     report.seconds_factor = t1.elapsed().as_secs_f64();
 
     let t2 = Instant::now();
@@ -210,7 +235,9 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
     for (lambda, v) in &pairs {
         e.mul(v, &mut ev);
         let res: Vec<f64> = ev.iter().zip(v).map(|(a, b)| a - lambda * b).collect();
-        report.residuals.push(norm(&res) / lambda.abs().max(f64::MIN_POSITIVE));
+        report
+            .residuals
+            .push(norm(&res) / lambda.abs().max(f64::MIN_POSITIVE));
         report.eigenvalues.push(*lambda);
     }
     let mut ortho = 0.0f64;
@@ -238,8 +265,15 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
     report.seconds_t = t3.elapsed().as_secs_f64();
     // The lazy walk's eigenvalues are non-negative.
     let scale: Vec<f64> = lambdas.iter().map(|l| l.max(0.0).powf(t)).collect();
-    let coords = base.chunks(dims).flat_map(|c| c.iter().zip(&scale).map(|(x, s)| x * s)).collect();
-    Ok(DiffusionMap { coords, dims, report })
+    let coords = base
+        .chunks(dims)
+        .flat_map(|c| c.iter().zip(&scale).map(|(x, s)| x * s))
+        .collect();
+    Ok(DiffusionMap {
+        coords,
+        dims,
+        report,
+    })
 }
 
 /// Thick-restart Lanczos with full reorthogonalisation for the `k` largest eigenpairs of the
@@ -253,7 +287,9 @@ fn lanczos_top(
     let m = opts.basis.max(2 * k + 4).min(n);
     let keep = (k + 6).min(m - 2);
     let mut rng = XorShiftRng::seed_from_u64(opts.seed);
-    let mut v0: Vec<f64> = (0..n).map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5).collect();
+    let mut v0: Vec<f64> = (0..n)
+        .map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+        .collect();
     let nv = norm(&v0);
     v0.iter_mut().for_each(|x| *x /= nv);
     let mut basis: Vec<Vec<f64>> = vec![v0];
@@ -266,14 +302,17 @@ fn lanczos_top(
         for j in basis.len() - 1..m {
             apply(&basis[j], &mut w);
             // Two passes of classical Gram-Schmidt against the whole basis.
+            let mut col = vec![0.0; basis.len()];
             for _ in 0..2 {
-                for (i, vi) in basis.iter().enumerate() {
+                for (ci, vi) in col.iter_mut().zip(&basis) {
                     let c = dot(vi, &w);
-                    h[i][j] += c;
+                    *ci += c;
                     w.iter_mut().zip(vi).for_each(|(x, y)| *x -= c * y);
                 }
             }
-            for i in 0..=j {
+            // Column j of H and, by symmetry, row j.
+            for (i, c) in col.into_iter().enumerate() {
+                h[i][j] += c;
                 h[j][i] = h[i][j];
             }
             beta = norm(&w);
@@ -286,11 +325,16 @@ fn lanczos_top(
         }
         // Ritz pairs of the projected matrix.
         let hm = Mat::<f64>::from_fn(m, m, |i, j| h[i][j]);
-        let eig = hm.self_adjoint_eigen(Side::Lower).map_err(|e| anyhow::anyhow!("projected eigenproblem: {e:?}"))?;
+        let eig = hm
+            .self_adjoint_eigen(Side::Lower)
+            .map_err(|e| anyhow::anyhow!("projected eigenproblem: {e:?}"))?;
         let (theta, y) = (eig.S().column_vector(), eig.U());
         // Descending order.
         let order: Vec<usize> = (0..m).rev().collect();
-        let converged = order.iter().take(k).all(|&c| (beta * y[(m - 1, c)]).abs() <= opts.tol * theta[c].abs());
+        let converged = order
+            .iter()
+            .take(k)
+            .all(|&c| (beta * y[(m - 1, c)]).abs() <= opts.tol * theta[c].abs());
         let take = if converged { k } else { keep };
         let ritz: Vec<Vec<f64>> = order
             .iter()
@@ -345,15 +389,29 @@ fn choose_t(graph: &GridGraph, base: &[f64], lambdas: &[f64], opts: &Options) ->
                 continue;
             }
             geo.push(dist[t as usize] * graph.cell as f64);
-            let (a, b) = (&base[s as usize * dims..][..dims], &base[t as usize * dims..][..dims]);
-            diffs.push(a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).collect::<Vec<f64>>());
+            let (a, b) = (
+                &base[s as usize * dims..][..dims],
+                &base[t as usize * dims..][..dims],
+            );
+            diffs.push(
+                a.iter()
+                    .zip(b)
+                    .map(|(x, y)| (x - y) * (x - y))
+                    .collect::<Vec<f64>>(),
+            );
         }
     }
-    let logs: Vec<f64> = lambdas.iter().map(|l| l.max(f64::MIN_POSITIVE).ln()).collect();
+    let logs: Vec<f64> = lambdas
+        .iter()
+        .map(|l| l.max(f64::MIN_POSITIVE).ln())
+        .collect();
     let pearson_at = |log10_t: f64| {
         let t = 10f64.powf(log10_t);
         let w: Vec<f64> = logs.iter().map(|l| (2.0 * t * l).exp()).collect();
-        let dd: Vec<f64> = diffs.iter().map(|d| d.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>().sqrt()).collect();
+        let dd: Vec<f64> = diffs
+            .iter()
+            .map(|d| d.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>().sqrt())
+            .collect();
         pearson(&dd, &geo)
     };
     let mut best = (0.0, f64::NEG_INFINITY);
@@ -379,7 +437,11 @@ fn choose_t(graph: &GridGraph, base: &[f64], lambdas: &[f64], opts: &Options) ->
     }
     let x = 0.5 * (lo + hi);
     let p = pearson_at(x);
-    if p > best.1 { (10f64.powf(x), p) } else { (10f64.powf(best.0), best.1) }
+    if p > best.1 {
+        (10f64.powf(x), p)
+    } else {
+        (10f64.powf(best.0), best.1)
+    }
 }
 
 /// Pearson correlation of two samples.
@@ -392,7 +454,11 @@ pub fn pearson(a: &[f64], b: &[f64]) -> f64 {
         saa += (x - ma) * (x - ma);
         sbb += (y - mb) * (y - mb);
     }
-    if saa == 0.0 || sbb == 0.0 { 0.0 } else { sab / (saa * sbb).sqrt() }
+    if saa == 0.0 || sbb == 0.0 {
+        0.0
+    } else {
+        sab / (saa * sbb).sqrt()
+    }
 }
 
 /// Table layout options.
@@ -406,7 +472,10 @@ pub struct TableOptions {
 
 impl Default for TableOptions {
     fn default() -> Self {
-        Self { kind: ElementKind::I16, coarsen: 1 }
+        Self {
+            kind: ElementKind::I16,
+            coarsen: 1,
+        }
     }
 }
 
@@ -449,7 +518,10 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
 
 /// The node of the block of `c x c` map cells at table cell `(tc, tr)` nearest its centre.
 fn representative(graph: &GridGraph, tc: u32, tr: u32, c: u32) -> Option<u32> {
-    let centre = ((tc * c) as f64 + c as f64 / 2.0, (tr * c) as f64 + c as f64 / 2.0);
+    let centre = (
+        (tc * c) as f64 + c as f64 / 2.0,
+        (tr * c) as f64 + c as f64 / 2.0,
+    );
     let mut best: Option<(f64, u32)> = None;
     for r in tr * c..((tr + 1) * c).min(graph.rows) {
         for col in tc * c..((tc + 1) * c).min(graph.cols) {
@@ -474,13 +546,18 @@ mod tests {
     /// The eigenvalues against faer's dense solver on a small map.
     #[test]
     fn matches_a_dense_eigensolver() {
-        let g = OwnedGrid::from_fn(16, 14, 1.0, |c, r| (c == 7 && r < 10) || (r == 5 && c > 10)).unwrap();
+        let g = OwnedGrid::from_fn(16, 14, 1.0, |c, r| (c == 7 && r < 10) || (r == 5 && c > 10))
+            .unwrap();
         let graph = GridGraph::build(&g.grid());
         let n = graph.len();
         let map = diffusion_map(&graph, &Options::default()).unwrap();
         let rep = &map.report;
         assert!(rep.orthogonality < 1e-12, "{}", rep.orthogonality);
-        assert!(rep.residuals.iter().all(|&r| r < 1e-10), "{:?}", rep.residuals);
+        assert!(
+            rep.residuals.iter().all(|&r| r < 1e-10),
+            "{:?}",
+            rep.residuals
+        );
         // Dense E, built independently from the definition.
         let kernel = |w: f64| (-(w * w) / 2.0).exp();
         let mut a = Mat::<f64>::zeros(n, n);
@@ -511,7 +588,15 @@ mod tests {
         let g = OwnedGrid::from_fn(20, 20, 1.0, |c, r| c == 10 && r > 3).unwrap();
         let graph = GridGraph::build(&g.grid());
         let map = diffusion_map(&graph, &Options::default()).unwrap();
-        let full = table_bytes(&graph, &map, &TableOptions { kind: ElementKind::F32, coarsen: 1 }).unwrap();
+        let full = table_bytes(
+            &graph,
+            &map,
+            &TableOptions {
+                kind: ElementKind::F32,
+                coarsen: 1,
+            },
+        )
+        .unwrap();
         let q = table_bytes(&graph, &map, &TableOptions::default()).unwrap();
         let (tf, tq) = (
             bi_am_rrt::DiffusionTable::new(&full).unwrap(),
@@ -524,10 +609,16 @@ mod tests {
                 let (pa, pb) = (graph.position(a), graph.position(b));
                 let exact = map.distance(a, b) as f32;
                 assert!((tf.distance(pa, pb) - exact).abs() <= 1e-4 * exact.max(1.0));
-                assert!((tq.distance(pa, pb) - exact).abs() <= bound + 1e-4 * exact, "{a} {b}");
+                assert!(
+                    (tq.distance(pa, pb) - exact).abs() <= bound + 1e-4 * exact,
+                    "{a} {b}"
+                );
             }
         }
         // Cells off the graph are unreachable.
-        assert_eq!(tq.distance(bi_am_rrt::Point::new(10.5, 10.5), graph.position(0)), f32::INFINITY);
+        assert_eq!(
+            tq.distance(bi_am_rrt::Point::new(10.5, 10.5), graph.position(0)),
+            f32::INFINITY
+        );
     }
 }

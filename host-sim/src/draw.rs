@@ -32,7 +32,10 @@ impl Canvas {
     /// A canvas showing `grid`, about `target_px` pixels wide.
     pub fn new(grid: &OccupancyGrid<'_>, target_px: u32) -> Self {
         let scale = (target_px as f32 / grid.width_m()).max(1.0);
-        let (w, h) = ((grid.width_m() * scale) as u32, (grid.height_m() * scale) as u32);
+        let (w, h) = (
+            (grid.width_m() * scale) as u32,
+            (grid.height_m() * scale) as u32,
+        );
         let mut img = RgbImage::from_pixel(w, h, FREE);
         for (x, y, px) in img.enumerate_pixels_mut() {
             let p = Point::new((x as f32 + 0.5) / scale, (y as f32 + 0.5) / scale);

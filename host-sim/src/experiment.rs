@@ -51,8 +51,14 @@ pub struct ExperimentArgs {
     pub jobs: Option<usize>,
     /// Reference-style rewiring budgets.
     pub faithful: bool,
+    /// Stop runs once the goal is in the tree.
+    pub search_only: bool,
     /// Anytime measurement budget in ms (0: none).
     pub anytime_ms: u64,
+    /// Diffusion table layout.
+    pub table: crate::diffusion::TableOptions,
+    /// Overrides every planner's `t_exp` (the paper: 150 ms).
+    pub t_exp: Option<Duration>,
     /// Output directory.
     pub out: PathBuf,
 }
@@ -66,8 +72,14 @@ pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
         .map(|name| {
             let name = name.trim();
             Config::from_name(name).with_context(|| {
-                let all: Vec<String> = Config::table1().iter().map(|c| c.name().to_string()).collect();
-                format!("unknown planner {name:?}; Table 1 names are {}", all.join(", "))
+                let all: Vec<String> = Config::table1()
+                    .iter()
+                    .map(|c| c.name().to_string())
+                    .collect();
+                format!(
+                    "unknown planner {name:?}; Table 1 names are {}",
+                    all.join(", ")
+                )
             })
         })
         .collect()
@@ -117,7 +129,11 @@ pub fn median(v: &mut [f64]) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+    Some(if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    })
 }
 
 fn mean(v: &[f64]) -> Option<f64> {
@@ -131,13 +147,28 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         Goals::First => vec![0],
         Goals::All => (0..prep.scenario.goals.len()).collect(),
     };
-    let protocol = Protocol::default();
+    let protocol = Protocol {
+        stop_when_found: args.search_only,
+        ..Protocol::default()
+    };
     let (runs, final_nodes) = with_planner(prep, cfg, seed, |p| {
         let runs = match args.clock {
-            ClockKind::Wall => drive(p, prep, &WallClock::new(), &goals, &protocol, |_, _, _, _| {})?,
-            ClockKind::Virtual => {
-                drive(p, prep, &virtual_clock(VIRTUAL_NS_PER_UNIT), &goals, &protocol, |_, _, _, _| {})?
-            }
+            ClockKind::Wall => drive(
+                p,
+                prep,
+                &WallClock::new(),
+                &goals,
+                &protocol,
+                |_, _, _, _| {},
+            )?,
+            ClockKind::Virtual => drive(
+                p,
+                prep,
+                &virtual_clock(VIRTUAL_NS_PER_UNIT),
+                &goals,
+                &protocol,
+                |_, _, _, _| {},
+            )?,
         };
         Ok((runs, p.tree().len()))
     })?;
@@ -145,7 +176,8 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         let mut c = cfg;
         c.t_exp = Duration::from_millis(args.anytime_ms);
         with_planner(prep, c, seed, |p| {
-            p.set_goal(prep.scenario.goals[0]).map_err(|e| anyhow::anyhow!("{e}"))?;
+            p.set_goal(prep.scenario.goals[0])
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             let progress = match args.clock {
                 ClockKind::Wall => p.grow(&WallClock::new()),
                 ClockKind::Virtual => p.grow(&virtual_clock(VIRTUAL_NS_PER_UNIT)),
@@ -191,13 +223,21 @@ pub fn summarise(rows: &[Row]) -> Vec<Summary> {
         .map(|(planner, scenario, goal_index)| {
             let group: Vec<&Row> = rows
                 .iter()
-                .filter(|r| r.planner == planner && r.scenario == scenario && r.goal_index == goal_index)
+                .filter(|r| {
+                    r.planner == planner && r.scenario == scenario && r.goal_index == goal_index
+                })
                 .collect();
             let reached: Vec<&&Row> = group.iter().filter(|r| r.reached).collect();
             let mut search: Vec<f64> = group.iter().filter_map(|r| r.search_time_s).collect();
             let mut len: Vec<f64> = reached.iter().map(|r| r.path_length_m as f64).collect();
-            let mut nodes: Vec<f64> = group.iter().filter_map(|r| r.nodes_at_goal.map(|n| n as f64)).collect();
-            let mut any: Vec<f64> = group.iter().filter_map(|r| r.anytime_cost_m.map(|c| c as f64)).collect();
+            let mut nodes: Vec<f64> = group
+                .iter()
+                .filter_map(|r| r.nodes_at_goal.map(|n| n as f64))
+                .collect();
+            let mut any: Vec<f64> = group
+                .iter()
+                .filter_map(|r| r.anytime_cost_m.map(|c| c as f64))
+                .collect();
             Summary {
                 runs: group.len(),
                 reached: reached.len(),
@@ -227,14 +267,31 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
     }
     let mut planners = args.planners.clone();
     if args.faithful {
-        planners.iter_mut().for_each(|c| c.rewire_mode = RewireMode::Faithful);
+        planners
+            .iter_mut()
+            .for_each(|c| c.rewire_mode = RewireMode::Faithful);
+    }
+    if let Some(t) = args.t_exp {
+        planners.iter_mut().for_each(|c| c.t_exp = t);
     }
     std::fs::create_dir_all(&args.out)?;
-    let jobs = args.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).stack_size(32 << 20).build()?;
-    let preps: Vec<Prepared> = args.scenarios.iter().cloned().map(Prepared::new).collect();
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .stack_size(32 << 20)
+        .build()?;
+    let preps: Vec<Prepared> = args
+        .scenarios
+        .iter()
+        .cloned()
+        .map(|s| Prepared::with_table(s, args.table))
+        .collect();
     // Bake what the planners need before timing anything.
-    let needs_d = planners.iter().any(|c| c.metric == bi_am_rrt::MetricKind::Diffusion);
+    let needs_d = planners
+        .iter()
+        .any(|c| c.metric == bi_am_rrt::MetricKind::Diffusion);
     pool.install(|| {
         preps.par_iter().try_for_each(|p| -> Result<()> {
             if needs_d {
@@ -245,8 +302,12 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
         })
     })?;
     for p in &preps {
-        if let Some(s) = p.bake_seconds.get() {
-            eprintln!("{}: diffusion table baked in {s:.3} s", p.scenario.name);
+        if let (Some(s), Ok(b)) = (p.bake_seconds.get(), p.diffusion()) {
+            eprintln!(
+                "{}: diffusion table ({} bytes) baked in {s:.3} s",
+                p.scenario.name,
+                b.table.len()
+            );
         }
     }
     let mut jobs_list = Vec::new();
@@ -259,15 +320,20 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
     }
     let bar = ProgressBar::new(jobs_list.len() as u64);
     bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta} {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let rows = Mutex::new(Vec::new());
     let result: Result<()> = pool.install(|| {
         jobs_list.par_iter().try_for_each(|&(si, cfg, seed)| {
-            let r = one_run(&preps[si], cfg, seed, args)
-                .with_context(|| format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name))?;
-            rows.lock().map_err(|_| anyhow::anyhow!("poisoned"))?.extend(r);
+            let r = one_run(&preps[si], cfg, seed, args).with_context(|| {
+                format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name)
+            })?;
+            rows.lock()
+                .map_err(|_| anyhow::anyhow!("poisoned"))?
+                .extend(r);
             bar.inc(1);
             Ok(())
         })
@@ -279,7 +345,9 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
     let order = |r: &Row| {
         (
             preps.iter().position(|p| p.scenario.name == r.scenario),
-            planners.iter().position(|c| c.name().to_string() == r.planner),
+            planners
+                .iter()
+                .position(|c| c.name().to_string() == r.planner),
             r.seed,
             r.goal_index,
         )
@@ -298,7 +366,16 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
     w.flush()?;
     println!(
         "{:<16} {:<10} {:>4} {:>8} {:>5} {:>12} {:>12} {:>10} {:>10} {:>9}",
-        "planner", "scenario", "goal", "reached", "coll", "search med", "search mean", "len med", "len mean", "nodes@g"
+        "planner",
+        "scenario",
+        "goal",
+        "reached",
+        "coll",
+        "search med",
+        "search mean",
+        "len med",
+        "len mean",
+        "nodes@g"
     );
     for s in &summary {
         println!(
@@ -316,13 +393,20 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
             fmt_opt(s.nodes_at_goal_median, 1.0, 0),
         );
     }
-    println!("wrote {} and {}", args.out.join("runs.csv").display(), args.out.join("summary.csv").display());
+    println!(
+        "wrote {} and {}",
+        args.out.join("runs.csv").display(),
+        args.out.join("summary.csv").display()
+    );
     Ok(())
 }
 
 /// Measures wall nanoseconds per unit of planner work over a few built-in runs.
 pub fn calibrate(repeats: u32) -> Result<()> {
-    let preps: Vec<Prepared> = crate::maps::builtin_scenarios().into_iter().map(Prepared::new).collect();
+    let preps: Vec<Prepared> = crate::maps::builtin_scenarios()
+        .into_iter()
+        .map(Prepared::new)
+        .collect();
     let mut ratios = Vec::new();
     for prep in &preps {
         for name in ["Bi-AM-RRT*(D)", "AM-RRT*(E)", "RT-RRT*"] {
@@ -330,8 +414,13 @@ pub fn calibrate(repeats: u32) -> Result<()> {
             for seed in 1..=repeats as u64 {
                 let clock = WallClock::new();
                 let t0 = clock.now();
+                // Twenty calls: the search and the start of the drive (3 s of planning).
+                let protocol = Protocol {
+                    max_calls: 20,
+                    ..Protocol::default()
+                };
                 with_planner(prep, cfg, seed, |p| {
-                    drive(p, prep, &clock, &[0], &Protocol::default(), |_, _, _, _| {}).map(|_| ())
+                    drive(p, prep, &clock, &[0], &protocol, |_, _, _, _| {}).map(|_| ())
                 })?;
                 let ns = (clock.now() - t0) as f64;
                 ratios.push(ns / clock.work().max(1) as f64);
@@ -339,11 +428,112 @@ pub fn calibrate(repeats: u32) -> Result<()> {
         }
     }
     let m = median(&mut ratios).unwrap_or(0.0);
+    // `median` sorted the sample.
     println!(
         "wall ns per work unit: median {m:.2} over {} runs (min {:.2}, max {:.2}); the virtual clock uses {VIRTUAL_NS_PER_UNIT}",
         ratios.len(),
         ratios.first().copied().unwrap_or(0.0),
         ratios.last().copied().unwrap_or(0.0)
     );
+    Ok(())
+}
+
+/// One sample of the expansion-rate measurement.
+#[derive(Clone, Debug, Serialize)]
+pub struct GrowthRow {
+    pub planner: String,
+    pub mode: String,
+    pub scenario: String,
+    pub t_s: f64,
+    pub nodes: usize,
+    pub expansions: u32,
+    pub expansions_per_s: f64,
+    pub goal_cost_m: Option<f32>,
+}
+
+/// Measures how the expansion rate changes as the tree grows: each planner plans towards goal
+/// 1 without moving for `seconds` of wall time in calls of `call_ms`, in both rewiring modes
+/// (per-expansion visit budget, and the reference's full time budgets).
+pub fn growth(
+    scenarios: &[Scenario],
+    planners: &[Config],
+    seconds: f64,
+    call_ms: u64,
+    seed: u64,
+    out: &std::path::Path,
+) -> Result<()> {
+    std::fs::create_dir_all(out)?;
+    let mut rows = Vec::new();
+    for sc in scenarios {
+        let prep = Prepared::new(sc.clone());
+        for base in planners {
+            for (mode, rewire) in [
+                ("per-expansion", base.rewire_mode),
+                ("faithful", RewireMode::Faithful),
+            ] {
+                let mut cfg = *base;
+                cfg.rewire_mode = rewire;
+                cfg.t_exp = Duration::from_millis(call_ms);
+                with_planner(&prep, cfg, seed, |p| {
+                    p.set_goal(sc.goals[0])
+                        .map_err(|e| anyhow::anyhow!("{e}"))?;
+                    let clock = WallClock::new();
+                    while (clock.now() as f64) < seconds * 1e9 {
+                        let t0 = clock.now();
+                        let pr = p.grow(&clock);
+                        let dt = (clock.now() - t0) as f64 * 1e-9;
+                        rows.push(GrowthRow {
+                            planner: base.name().to_string(),
+                            mode: mode.into(),
+                            scenario: sc.name.clone(),
+                            t_s: clock.now() as f64 * 1e-9,
+                            nodes: pr.nodes,
+                            expansions: pr.expansions,
+                            expansions_per_s: pr.expansions as f64 / dt.max(1e-9),
+                            goal_cost_m: pr.goal_cost.filter(|c| !c.blocked).map(|c| c.length),
+                        });
+                    }
+                    Ok(())
+                })?;
+            }
+        }
+    }
+    let mut w = csv::Writer::from_path(out.join("growth.csv"))?;
+    for r in &rows {
+        w.serialize(r)?;
+    }
+    w.flush()?;
+    // Median rate per tree-size band.
+    let bands = [0usize, 250, 500, 1000, 2000, 4000, 8000, usize::MAX];
+    println!(
+        "{:<16} {:<10} {:<14} {:>14} {:>16}",
+        "planner", "scenario", "mode", "nodes", "expansions/s"
+    );
+    let mut keys: Vec<(String, String, String)> = Vec::new();
+    for r in &rows {
+        let k = (r.planner.clone(), r.scenario.clone(), r.mode.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (planner, scenario, mode) in keys {
+        for w in bands.windows(2) {
+            let mut rates: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.planner == planner && r.scenario == scenario && r.mode == mode)
+                .filter(|r| r.nodes >= w[0] && r.nodes < w[1])
+                .map(|r| r.expansions_per_s)
+                .collect();
+            if let Some(m) = median(&mut rates) {
+                let band = if w[1] == usize::MAX {
+                    format!("{}+", w[0])
+                } else {
+                    format!("{}-{}", w[0], w[1])
+                };
+                println!("{planner:<16} {scenario:<10} {mode:<14} {band:>14} {m:>16.0}");
+            }
+        }
+    }
+    println!("wrote {}", out.join("growth.csv").display());
     Ok(())
 }

@@ -9,8 +9,8 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use bi_am_rrt::map::OccupancyGrid;
 use bi_am_rrt::Point;
+use bi_am_rrt::map::OccupancyGrid;
 
 /// Cell offsets `(dx, dy)` of the neighbours: `dx^2 + dy^2 <= 6.25`, excluding `(0, 0)`.
 pub fn neighbour_offsets() -> Vec<(i32, i32)> {
@@ -50,7 +50,9 @@ impl GridGraph {
     /// Builds the graph of `grid`.
     pub fn build(grid: &OccupancyGrid<'_>) -> Self {
         let (cols, rows) = (grid.cols() as i32, grid.rows() as i32);
-        let free = |c: i32, r: i32| c >= 0 && r >= 0 && c < cols && r < rows && !grid.is_occupied(c as u16, r as u16);
+        let free = |c: i32, r: i32| {
+            c >= 0 && r >= 0 && c < cols && r < rows && !grid.is_occupied(c as u16, r as u16)
+        };
         let offs = neighbour_offsets();
         // Edge test between free cells: the whole bounding box is free.
         let edge = |c: i32, r: i32, dx: i32, dy: i32| {
@@ -174,8 +176,14 @@ impl GridGraph {
 
     /// Neighbours of a node with edge weights (cells).
     pub fn neighbours(&self, node: u32) -> impl Iterator<Item = (u32, f64)> + '_ {
-        let (a, b) = (self.offsets[node as usize] as usize, self.offsets[node as usize + 1] as usize);
-        self.targets[a..b].iter().copied().zip(self.weights[a..b].iter().copied())
+        let (a, b) = (
+            self.offsets[node as usize] as usize,
+            self.offsets[node as usize + 1] as usize,
+        );
+        self.targets[a..b]
+            .iter()
+            .copied()
+            .zip(self.weights[a..b].iter().copied())
     }
 
     /// Shortest-path distances (cells) from `src` to every node, written into `dist`.
@@ -228,7 +236,11 @@ mod tests {
         // (3,0) -> (4,2) is a knight move whose bounding box is free: an edge of length sqrt 5.
         let a = graph.node_at(Point::new(3.5, 0.5)).unwrap();
         let b = graph.node_at(Point::new(4.5, 2.5)).unwrap();
-        assert!(graph.neighbours(a).any(|(v, w)| v == b && (w - 5f64.sqrt()).abs() < 1e-12));
+        assert!(
+            graph
+                .neighbours(a)
+                .any(|(v, w)| v == b && (w - 5f64.sqrt()).abs() < 1e-12)
+        );
         // (0,1) -> (2,0) has the wall cell (2,1) in its bounding box: no edge.
         let a = graph.node_at(Point::new(0.5, 1.5)).unwrap();
         let b = graph.node_at(Point::new(2.5, 0.5)).unwrap();

@@ -15,7 +15,10 @@ use host_sim::maps;
 use host_sim::run::{self, RunArgs};
 
 #[derive(Parser)]
-#[command(version, about = "Simulator and experiment runner for the Bi-AM-RRT* planner")]
+#[command(
+    version,
+    about = "Simulator and experiment runner for the Bi-AM-RRT* planner"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -91,6 +94,18 @@ enum Command {
         /// Rewiring as the reference (every expansion spends its full t_root/t_goal).
         #[arg(long)]
         faithful: bool,
+        /// Diffusion table element type.
+        #[arg(long, value_enum, default_value = "i16")]
+        table_kind: KindArg,
+        /// Diffusion table: map cells per table cell along each axis.
+        #[arg(long, default_value_t = 1)]
+        coarsen: u16,
+        /// Planning time per call in ms (default: the paper's 150).
+        #[arg(long)]
+        t_exp_ms: Option<u64>,
+        /// Stop each run once the goal is in the tree (search time and nodes only).
+        #[arg(long)]
+        search_only: bool,
         /// Planning time for the "cost after 100 ms without moving" column (ms; 0: skip).
         #[arg(long, default_value_t = 100)]
         anytime_ms: u64,
@@ -116,12 +131,41 @@ enum Command {
         /// Also write Rust source with a `static` table to this file.
         #[arg(long)]
         rust: Option<PathBuf>,
+        /// Geodesic: also time the computation of every distance field (all pairs).
+        #[arg(long)]
+        all_pairs: bool,
+    },
+    /// Measure how the expansion rate changes as the tree grows (no motion, wall clock).
+    Growth {
+        #[arg(long)]
+        scenarios: PathBuf,
+        #[arg(long, value_delimiter = ',')]
+        maps: Option<Vec<String>>,
+        #[arg(long, default_value = "Bi-AM-RRT*(D),Bi-AM-RRT*(E)")]
+        planners: String,
+        /// Seconds of planning per planner and mode.
+        #[arg(long, default_value_t = 3.0)]
+        seconds: f64,
+        /// Length of one plan call (ms).
+        #[arg(long, default_value_t = 50)]
+        call_ms: u64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, default_value = "out/growth")]
+        out: PathBuf,
     },
     /// Measure wall nanoseconds per unit of planner work (to calibrate the virtual clock).
     Calibrate {
         #[arg(long, default_value_t = 5)]
         repeats: u32,
     },
+}
+
+fn kind_of(k: KindArg) -> ElementKind {
+    match k {
+        KindArg::I16 => ElementKind::I16,
+        KindArg::F32 => ElementKind::F32,
+    }
 }
 
 fn load_map(spec: &str) -> Result<maps::OwnedGrid> {
@@ -134,13 +178,31 @@ fn load_map(spec: &str) -> Result<maps::OwnedGrid> {
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
-        Command::Run { builtin, scenarios, scenario, planner, all_goals, seed, clock, obstacle, out } => {
+        Command::Run {
+            builtin,
+            scenarios,
+            scenario,
+            planner,
+            all_goals,
+            seed,
+            clock,
+            obstacle,
+            out,
+        } => {
             let sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
                 (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
                 (None, _) => maps::builtin_by_name(&builtin)?,
             };
-            run::run(&RunArgs { scenario: sc, planner, all_goals, seed, clock, obstacle, out })
+            run::run(&RunArgs {
+                scenario: sc,
+                planner,
+                all_goals,
+                seed,
+                clock,
+                obstacle,
+                out,
+            })
         }
         Command::Experiment {
             scenarios,
@@ -152,6 +214,10 @@ fn main() -> Result<()> {
             seed,
             jobs,
             faithful,
+            table_kind,
+            coarsen,
+            t_exp_ms,
+            search_only,
             anytime_ms,
             out,
         } => {
@@ -165,20 +231,35 @@ fn main() -> Result<()> {
                 seed,
                 jobs,
                 faithful,
+                search_only,
                 anytime_ms,
+                table: TableOptions {
+                    kind: kind_of(table_kind),
+                    coarsen,
+                },
+                t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
             })
         }
-        Command::Bake { map, metric, out, kind, coarsen, rust } => {
+        Command::Bake {
+            map,
+            metric,
+            out,
+            kind,
+            coarsen,
+            rust,
+            all_pairs,
+        } => {
             let grid = load_map(&map)?;
             let t0 = Instant::now();
             match metric {
                 MetricArg::Diffusion => {
-                    let kind = match kind {
-                        KindArg::I16 => ElementKind::I16,
-                        KindArg::F32 => ElementKind::F32,
-                    };
-                    let baked = bake::bake_diffusion(&grid, &Options::default(), &TableOptions { kind, coarsen })?;
+                    let kind = kind_of(kind);
+                    let baked = bake::bake_diffusion(
+                        &grid,
+                        &Options::default(),
+                        &TableOptions { kind, coarsen },
+                    )?;
                     let secs = t0.elapsed().as_secs_f64();
                     bake::write_file(&out, &baked.table)?;
                     let r = &baked.map.report;
@@ -204,6 +285,11 @@ fn main() -> Result<()> {
                         r.pearson
                     );
                     println!("table: {} bytes -> {}", baked.table.len(), out.display());
+                    let e = bake::table_error(&baked, 20_000, 1)?;
+                    println!(
+                        "table vs full precision over {} node pairs: max error {:.3e} (relative {:.3e}; bound {:.3e}; largest distance {:.3e})",
+                        e.pairs, e.max_abs, e.max_rel, e.bound, e.max_distance
+                    );
                     if let Some(rs) = rust {
                         let src = bake::rust_source("DIFFUSION_TABLE", &baked.table, &map);
                         bake::write_file(&rs, src.as_bytes())?;
@@ -221,9 +307,36 @@ fn main() -> Result<()> {
                         bytes.len(),
                         out.display()
                     );
+                    let (per_field, total) = bake::geodesic_costs(&graph, 25, all_pairs);
+                    println!(
+                        "one distance field (Dijkstra): {:.3} ms (median of 25)",
+                        per_field * 1e3
+                    );
+                    if let Some(t) = total {
+                        println!("every field (all-pairs distances, all cores): {t:.2} s");
+                    }
                 }
             }
             Ok(())
+        }
+        Command::Growth {
+            scenarios,
+            maps: names,
+            planners,
+            seconds,
+            call_ms,
+            seed,
+            out,
+        } => {
+            let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            experiment::growth(
+                &scs,
+                &experiment::parse_planners(&planners)?,
+                seconds,
+                call_ms,
+                seed,
+                &out,
+            )
         }
         Command::Calibrate { repeats } => experiment::calibrate(repeats).context("calibrating"),
     }

@@ -9,9 +9,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
+use bi_am_rrt::Point;
 use bi_am_rrt::builtin;
 use bi_am_rrt::map::{OccupancyGrid, pack_grid};
-use bi_am_rrt::Point;
 use serde::Deserialize;
 
 /// An occupancy grid that owns its bits.
@@ -29,22 +29,42 @@ pub struct OwnedGrid {
 
 impl OwnedGrid {
     /// A grid of `width x height` cells of `cell` metres from `occupied(col, row)`.
-    pub fn from_fn(width: u16, height: u16, cell: f32, occupied: impl FnMut(u16, u16) -> bool) -> Result<Self> {
+    pub fn from_fn(
+        width: u16,
+        height: u16,
+        cell: f32,
+        occupied: impl FnMut(u16, u16) -> bool,
+    ) -> Result<Self> {
         let mut bits = vec![0u8; OccupancyGrid::bytes_needed(width, height)];
         pack_grid(&mut bits, width, height, occupied).map_err(|e| anyhow::anyhow!("{e}"))?;
-        Ok(Self { width, height, cell_bits: cell.to_bits(), bits })
+        Ok(Self {
+            width,
+            height,
+            cell_bits: cell.to_bits(),
+            bits,
+        })
     }
 
     /// The core's view of the grid.
     pub fn grid(&self) -> OccupancyGrid<'_> {
-        OccupancyGrid::new(&self.bits, self.width, self.height, f32::from_bits(self.cell_bits))
-            .expect("an OwnedGrid is valid by construction")
+        OccupancyGrid::new(
+            &self.bits,
+            self.width,
+            self.height,
+            f32::from_bits(self.cell_bits),
+        )
+        .expect("an OwnedGrid is valid by construction")
     }
 
     /// Copies a core grid.
     pub fn from_grid(g: &OccupancyGrid<'_>) -> Self {
         let n = OccupancyGrid::bytes_needed(g.cols(), g.rows());
-        Self { width: g.cols(), height: g.rows(), cell_bits: g.cell_size().to_bits(), bits: g.bits()[..n].to_vec() }
+        Self {
+            width: g.cols(),
+            height: g.rows(),
+            cell_bits: g.cell_size().to_bits(),
+            bits: g.bits()[..n].to_vec(),
+        }
     }
 }
 
@@ -55,14 +75,18 @@ pub fn pil_grey(r: u8, g: u8, b: u8) -> u8 {
 
 /// Reads a PNG map with the mean-threshold rule (module docs), 1 m per pixel.
 pub fn load_png(path: &Path) -> Result<OwnedGrid> {
-    let img = image::open(path).with_context(|| format!("reading map {}", path.display()))?.to_rgb8();
+    let img = image::open(path)
+        .with_context(|| format!("reading map {}", path.display()))?
+        .to_rgb8();
     let (w, h) = img.dimensions();
     if w == 0 || h == 0 || w > u16::MAX as u32 || h > u16::MAX as u32 {
         bail!("map {} has unusable size {w} x {h}", path.display());
     }
     let grey: Vec<u8> = img.pixels().map(|p| pil_grey(p[0], p[1], p[2])).collect();
     let mean = grey.iter().map(|&v| v as f64).sum::<f64>() / grey.len() as f64;
-    OwnedGrid::from_fn(w as u16, h as u16, 1.0, |c, r| (grey[r as usize * w as usize + c as usize] as f64) < mean)
+    OwnedGrid::from_fn(w as u16, h as u16, 1.0, |c, r| {
+        (grey[r as usize * w as usize + c as usize] as f64) < mean
+    })
 }
 
 /// One scenario: a map, a start, goals and the connection distance.
@@ -100,8 +124,10 @@ fn default_sigma() -> f32 {
 /// Reads a scenario file; map paths are relative to it. `only` keeps the named scenarios (in
 /// the file's order); an unknown name is an error.
 pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenario>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let table: toml::Table = toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let table: toml::Table =
+        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     if let Some(names) = only {
         for n in names {
@@ -115,13 +141,19 @@ pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenar
         if only.is_some_and(|names| !names.contains(&name)) {
             continue;
         }
-        let e: Entry = value.try_into().with_context(|| format!("scenario {name}"))?;
+        let e: Entry = value
+            .try_into()
+            .with_context(|| format!("scenario {name}"))?;
         let file = dir.join(&e.file);
         let map = load_png(&file)?;
         if let Some([w, h]) = e.size_m
             && (w != map.width as f32 || h != map.height as f32)
         {
-            bail!("scenario {name}: size_m {w} x {h} but the map is {} x {} cells", map.width, map.height);
+            bail!(
+                "scenario {name}: size_m {w} x {h} but the map is {} x {} cells",
+                map.width,
+                map.height
+            );
         }
         let pt = |p: [f32; 2]| Point::new(p[0], p[1]);
         out.push(Scenario {
@@ -155,10 +187,12 @@ pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
 
 /// The built-in scenario of this name.
 pub fn builtin_by_name(name: &str) -> Result<Scenario> {
-    builtin::by_name(name).map(builtin_scenario).with_context(|| {
-        let names: Vec<_> = builtin::ALL.iter().map(|s| s.name).collect();
-        format!("no built-in scenario {name:?} (have {names:?})")
-    })
+    builtin::by_name(name)
+        .map(builtin_scenario)
+        .with_context(|| {
+            let names: Vec<_> = builtin::ALL.iter().map(|s| s.name).collect();
+            format!("no built-in scenario {name:?} (have {names:?})")
+        })
 }
 
 #[cfg(test)]
@@ -178,7 +212,10 @@ mod tests {
     #[test]
     fn builtins_round_trip() {
         let s = builtin_by_name("maze").unwrap();
-        assert_eq!(s.map.grid().is_occupied(5, 12), builtin::MAZE.grid.is_occupied(5, 12));
+        assert_eq!(
+            s.map.grid().is_occupied(5, 12),
+            builtin::MAZE.grid.is_occupied(5, 12)
+        );
         assert!(builtin_by_name("nope").is_err());
     }
 }

@@ -17,8 +17,8 @@ use std::collections::HashMap;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use bi_am_rrt::metric::{DiffusionTable, Euclidean, Metric};
 use bi_am_rrt::Point;
+use bi_am_rrt::metric::{DiffusionTable, Euclidean, Metric};
 
 use crate::graph::GridGraph;
 

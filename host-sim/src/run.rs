@@ -66,10 +66,15 @@ use image::Rgb;
 
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
-    let cfg = Config::from_name(&args.planner).with_context(|| format!("unknown planner {:?}", args.planner))?;
+    let cfg = Config::from_name(&args.planner)
+        .with_context(|| format!("unknown planner {:?}", args.planner))?;
     let prep = Prepared::new(args.scenario.clone());
     std::fs::create_dir_all(&args.out)?;
-    let goals: Vec<usize> = if args.all_goals { (0..prep.scenario.goals.len()).collect() } else { vec![0] };
+    let goals: Vec<usize> = if args.all_goals {
+        (0..prep.scenario.goals.len()).collect()
+    } else {
+        vec![0]
+    };
     let mut trail = vec![prep.scenario.start];
     let mut found_drawn = false;
     let mut dropped = false;
@@ -101,10 +106,22 @@ pub fn run(args: &RunArgs) -> Result<()> {
             }
         };
         let runs: Vec<GoalRun> = match args.clock {
-            ClockKind::Wall => drive(p, &prep, &WallClock::new(), &goals, &Protocol::default(), hook)?,
-            ClockKind::Virtual => {
-                drive(p, &prep, &virtual_clock(VIRTUAL_NS_PER_UNIT), &goals, &Protocol::default(), hook)?
-            }
+            ClockKind::Wall => drive(
+                p,
+                &prep,
+                &WallClock::new(),
+                &goals,
+                &Protocol::default(),
+                hook,
+            )?,
+            ClockKind::Virtual => drive(
+                p,
+                &prep,
+                &virtual_clock(VIRTUAL_NS_PER_UNIT),
+                &goals,
+                &Protocol::default(),
+                hook,
+            )?,
         };
         picture(p, &trail, &prep.scenario).save(&out.join("final.png"))?;
         Ok(runs)
@@ -121,13 +138,17 @@ pub fn run(args: &RunArgs) -> Result<()> {
             calls: g.result.calls,
         })
         .collect();
-    println!("{} on {} ({}), seed {}, {:?} clock", args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock);
+    println!(
+        "{} on {} ({}), seed {}, {:?} clock",
+        args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock
+    );
     for g in &json {
         println!(
             "  goal {}: reached {}, search time {}, path {:.2} m, {} collisions, {} nodes when found, {} plan calls",
             g.goal_index,
             g.reached,
-            g.search_time_s.map_or("-".into(), |s| format!("{:.3} ms", s * 1e3)),
+            g.search_time_s
+                .map_or("-".into(), |s| format!("{:.3} ms", s * 1e3)),
             g.path_length_m,
             g.collisions,
             g.nodes_at_goal.map_or("-".into(), |n| n.to_string()),
@@ -137,7 +158,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(s) = prep.bake_seconds.get() {
         println!("  diffusion table baked in {s:.3} s");
     }
-    std::fs::write(args.out.join("result.json"), serde_json::to_string_pretty(&json)?)?;
+    std::fs::write(
+        args.out.join("result.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
     println!("  pictures and result.json in {}", args.out.display());
     Ok(())
 }

@@ -29,7 +29,8 @@ pub const OBSTACLES: usize = 8;
 pub const GEODESIC_CACHE_BYTES: usize = 192 << 20;
 
 /// The simulator's planner type.
-pub type SimPlanner<'s, 't> = Planner<'s, 't, AnyMetric<'t>, XorShiftRng, NODES, BUCKETS, OBSTACLES>;
+pub type SimPlanner<'s, 't> =
+    Planner<'s, 't, AnyMetric<'t>, XorShiftRng, NODES, BUCKETS, OBSTACLES>;
 
 /// A scenario with its metric data, computed on first use and shared by all runs.
 pub struct Prepared {
@@ -39,25 +40,40 @@ pub struct Prepared {
     diffusion: OnceLock<Result<Baked, String>>,
     /// Seconds the diffusion bake took (once done).
     pub bake_seconds: OnceLock<f64>,
+    /// Layout of the diffusion table.
+    pub table: TableOptions,
 }
 
 impl Prepared {
     /// Wraps a scenario; nothing is computed yet.
     pub fn new(scenario: Scenario) -> Self {
-        Self { scenario, graph: OnceLock::new(), diffusion: OnceLock::new(), bake_seconds: OnceLock::new() }
+        Self::with_table(scenario, TableOptions::default())
+    }
+
+    /// Wraps a scenario whose diffusion table will have this layout.
+    pub fn with_table(scenario: Scenario, table: TableOptions) -> Self {
+        Self {
+            scenario,
+            graph: OnceLock::new(),
+            diffusion: OnceLock::new(),
+            bake_seconds: OnceLock::new(),
+            table,
+        }
     }
 
     /// The grid graph (for the geodesic metric).
     pub fn graph(&self) -> Arc<GridGraph> {
-        self.graph.get_or_init(|| Arc::new(GridGraph::build(&self.scenario.map.grid()))).clone()
+        self.graph
+            .get_or_init(|| Arc::new(GridGraph::build(&self.scenario.map.grid())))
+            .clone()
     }
 
-    /// The baked diffusion table (default options: i16, full resolution).
+    /// The baked diffusion table.
     pub fn diffusion(&self) -> Result<&Baked> {
         self.diffusion
             .get_or_init(|| {
                 let t0 = Instant::now();
-                let r = bake_diffusion(&self.scenario.map, &Options::default(), &TableOptions::default())
+                let r = bake_diffusion(&self.scenario.map, &Options::default(), &self.table)
                     .map_err(|e| format!("{e:#}"));
                 let _ = self.bake_seconds.set(t0.elapsed().as_secs_f64());
                 r
@@ -73,9 +89,10 @@ impl Prepared {
             MetricKind::Diffusion => AnyMetric::Diffusion(
                 DiffusionTable::new(&self.diffusion()?.table).map_err(|e| anyhow!("table: {e}"))?,
             ),
-            MetricKind::Geodesic => {
-                AnyMetric::Geodesic(Geodesic::with_cache_bytes(self.graph(), GEODESIC_CACHE_BYTES))
-            }
+            MetricKind::Geodesic => AnyMetric::Geodesic(Geodesic::with_cache_bytes(
+                self.graph(),
+                GEODESIC_CACHE_BYTES,
+            )),
         })
     }
 
@@ -96,8 +113,15 @@ pub fn with_planner<T>(
     let metric = prep.metric(cfg.metric)?;
     let map = Map::new(prep.scenario.map.grid());
     let rng = XorShiftRng::seed_from_u64(seed);
-    let mut planner = Planner::new(&mut storage, map, metric, rng, prep.config(cfg), prep.scenario.start)
-        .map_err(|e| anyhow!("start of {}: {e}", prep.scenario.name))?;
+    let mut planner = Planner::new(
+        &mut storage,
+        map,
+        metric,
+        rng,
+        prep.config(cfg),
+        prep.scenario.start,
+    )
+    .map_err(|e| anyhow!("start of {}: {e}", prep.scenario.name))?;
     f(&mut planner)
 }
 
@@ -124,10 +148,18 @@ pub fn drive<'s, 't, C: Clock + ?Sized>(
     let mut out = Vec::new();
     for &gi in goals {
         let goal = prep.scenario.goals[gi];
-        let result = run_to_goal(planner, clock, goal, protocol, |p, a, c| on_call(p, gi, a, c))
-            .map_err(|e| anyhow!("goal {gi} of {}: {e}", prep.scenario.name))?;
-        let search_s = result.search_ticks.map(|t| t as f64 / clock.ticks_per_second() as f64);
-        out.push(GoalRun { goal_index: gi, result, search_s });
+        let result = run_to_goal(planner, clock, goal, protocol, |p, a, c| {
+            on_call(p, gi, a, c)
+        })
+        .map_err(|e| anyhow!("goal {gi} of {}: {e}", prep.scenario.name))?;
+        let search_s = result
+            .search_ticks
+            .map(|t| t as f64 / clock.ticks_per_second() as f64);
+        out.push(GoalRun {
+            goal_index: gi,
+            result,
+            search_s,
+        });
         if !result.reached {
             break;
         }

@@ -7,12 +7,12 @@ use std::cell::RefCell;
 use std::collections::{BinaryHeap, HashMap};
 use std::rc::Rc;
 
+use bi_am_rrt::Planner;
+pub use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::geometry::Point;
 use bi_am_rrt::map::{Circle, OccupancyGrid};
 use bi_am_rrt::metric::{ElementKind, Metric, TableHeader, write_table};
-use bi_am_rrt::Planner;
-pub use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use rand_core::Rng;
 
 /// Free cells of the largest 8-connected component (no corner cutting), as a cell mask.
@@ -198,7 +198,9 @@ pub fn drive<M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>(
 ) -> RunResult {
     run_to_goal(planner, clock, goal, &proto, |p, agent, call| {
         p.tree().validate().expect("forward tree invariants");
-        p.reverse_tree().validate().expect("reverse tree invariants");
+        p.reverse_tree()
+            .validate()
+            .expect("reverse tree invariants");
         on_call(p, agent, call)
     })
     .expect("goal accepted")

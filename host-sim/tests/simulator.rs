@@ -1,0 +1,177 @@
+//! The simulator end to end: scenario files with PNG maps, the experiment runner's CSV, and the
+//! bake on the paper's reference maps (read from ../shared/maps; skipped with a message when
+//! absent).
+
+use std::path::{Path, PathBuf};
+
+use bi_am_rrt::builtin;
+use host_sim::clock::ClockKind;
+use host_sim::diffusion::{Options, TableOptions};
+use host_sim::experiment::{self, ExperimentArgs, Goals};
+use host_sim::graph::GridGraph;
+use host_sim::maps;
+
+/// Writes the built-in scenarios as PNG maps (black walls on white) plus a scenario file.
+fn write_builtin_file(dir: &Path) -> PathBuf {
+    let mut toml = String::new();
+    for s in builtin::ALL {
+        let g = s.grid;
+        let img = image::RgbImage::from_fn(g.cols() as u32, g.rows() as u32, |x, y| {
+            if g.is_occupied(x as u16, y as u16) {
+                image::Rgb([0, 0, 0])
+            } else {
+                image::Rgb([255, 255, 255])
+            }
+        });
+        img.save(dir.join(format!("{}.png", s.name))).unwrap();
+        let goals: Vec<String> = s
+            .goals
+            .iter()
+            .map(|p| format!("[{}, {}]", p.x, p.y))
+            .collect();
+        toml.push_str(&format!(
+            "[{}]\nfile = \"{}.png\"\nsize_m = [{}, {}]\nsigma_m = {}\nstart = [{}, {}]\ngoals = [{}]\n\n",
+            s.name,
+            s.name,
+            g.cols(),
+            g.rows(),
+            s.sigma,
+            s.start.x,
+            s.start.y,
+            goals.join(", ")
+        ));
+    }
+    let path = dir.join("scenarios.toml");
+    std::fs::write(&path, toml).unwrap();
+    path
+}
+
+#[test]
+fn scenario_files_read_pngs_with_the_mean_rule() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_builtin_file(dir.path());
+    let scs = maps::load_scenarios(&file, None).unwrap();
+    assert_eq!(scs.len(), builtin::ALL.len());
+    for (s, b) in scs.iter().zip(builtin::ALL) {
+        assert_eq!(s.name, b.name);
+        assert_eq!(s.map, maps::OwnedGrid::from_grid(&b.grid), "{}", s.name);
+        assert_eq!(s.start, b.start);
+        assert_eq!(s.goals, b.goals);
+    }
+    let only = maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap();
+    assert_eq!(only.len(), 1);
+    assert!(maps::load_scenarios(&file, Some(&["nope".to_string()])).is_err());
+}
+
+#[test]
+fn the_experiment_writes_one_row_per_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_builtin_file(dir.path());
+    let out = dir.path().join("out");
+    let args = ExperimentArgs {
+        scenarios: maps::load_scenarios(&file, Some(&["open".to_string()])).unwrap(),
+        planners: experiment::parse_planners("Bi-AM-RRT*(D),RT-RRT*").unwrap(),
+        repeats: 2,
+        clock: ClockKind::Virtual,
+        goals: Goals::First,
+        seed: 1,
+        jobs: Some(2),
+        faithful: false,
+        search_only: false,
+        anytime_ms: 20,
+        table: TableOptions::default(),
+        t_exp: Some(std::time::Duration::from_millis(20)),
+        out: out.clone(),
+    };
+    experiment::run(&args).unwrap();
+    let mut rdr = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let headers = rdr.headers().unwrap().clone();
+    for col in [
+        "planner",
+        "scenario",
+        "goal_index",
+        "seed",
+        "reached",
+        "search_time_s",
+        "path_length_m",
+        "collisions",
+        "nodes_at_goal",
+    ] {
+        assert!(headers.iter().any(|h| h == col), "column {col}");
+    }
+    let rows: Vec<csv::StringRecord> = rdr.records().map(Result::unwrap).collect();
+    assert_eq!(rows.len(), 4);
+    let idx = |name: &str| headers.iter().position(|h| h == name).unwrap();
+    for r in &rows {
+        assert_eq!(&r[idx("reached")], "true");
+        assert_eq!(&r[idx("collisions")], "0");
+        let len: f64 = r[idx("path_length_m")].parse().unwrap();
+        assert!(len > 40.0 && len < 60.0, "path {len}");
+    }
+    assert_eq!(&rows[0][idx("planner")], "Bi-AM-RRT*(D)");
+    // The virtual clock makes the run repeatable: run again, same rows.
+    let first = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    experiment::run(&args).unwrap();
+    let again = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let strip = |s: &str| {
+        s.lines()
+            .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        strip(&first),
+        strip(&again),
+        "same rows apart from the wall time column"
+    );
+    assert!(out.join("summary.csv").exists());
+}
+
+fn shared_maps() -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps/scenarios.toml");
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!(
+            "skipped: {} not found (the reference maps live beside the project)",
+            p.display()
+        );
+        None
+    }
+}
+
+#[test]
+fn reference_maps_bake_to_accurate_tables() {
+    let Some(file) = shared_maps() else { return };
+    let scs = maps::load_scenarios(
+        &file,
+        Some(&["bug_trap".into(), "maze".into(), "office".into()]),
+    )
+    .unwrap();
+    // Graph sizes checked against the reference's own matrices (notes/algorithm.md).
+    let expected = [(8600, 169_556), (8336, 160_532), (23_666, 442_948)];
+    for (s, (nodes, nnz)) in scs.iter().zip(expected) {
+        let graph = GridGraph::build(&s.map.grid());
+        assert_eq!(graph.len(), nodes, "{}", s.name);
+        let baked =
+            host_sim::bake::bake_diffusion(&s.map, &Options::default(), &TableOptions::default())
+                .unwrap();
+        let r = &baked.map.report;
+        assert_eq!(r.nonzeros, nnz, "{}", s.name);
+        assert!((r.eigenvalues[0] - 1.0).abs() < 1e-12);
+        assert!(
+            r.residuals.iter().all(|&x| x < 1e-6),
+            "{}: {:?}",
+            s.name,
+            r.residuals
+        );
+        assert!(r.orthogonality < 1e-12, "{}: {}", s.name, r.orthogonality);
+        assert!(r.pearson > 0.8, "{}: {}", s.name, r.pearson);
+        let e = host_sim::bake::table_error(&baked, 5_000, 3).unwrap();
+        assert!(e.max_abs <= e.bound, "{}: {e:?}", s.name);
+        // The planner's start and goals are on the table.
+        let t = bi_am_rrt::DiffusionTable::new(&baked.table).unwrap();
+        for p in std::iter::once(s.start).chain(s.goals.iter().copied()) {
+            assert!(t.covers(p), "{} {p:?}", s.name);
+        }
+    }
+}
