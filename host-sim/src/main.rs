@@ -97,9 +97,13 @@ enum Command {
         /// Diffusion table element type.
         #[arg(long, value_enum, default_value = "i16")]
         table_kind: KindArg,
-        /// Diffusion table: map cells per table cell along each axis.
-        #[arg(long, default_value_t = 1)]
+        /// Diffusion table: map cells per table cell along each axis (0: smallest that fits
+        /// --max-bytes).
+        #[arg(long, default_value_t = 0)]
         coarsen: u16,
+        /// Diffusion table: size budget for --coarsen 0.
+        #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
+        max_bytes: usize,
         /// Planning time per call in ms (default: the paper's 150).
         #[arg(long)]
         t_exp_ms: Option<u64>,
@@ -125,9 +129,12 @@ enum Command {
         /// Diffusion: element type.
         #[arg(long, value_enum, default_value = "i16")]
         kind: KindArg,
-        /// Diffusion: map cells per table cell along each axis.
-        #[arg(long, default_value_t = 1)]
+        /// Diffusion: map cells per table cell along each axis (0: smallest that fits --max-bytes).
+        #[arg(long, default_value_t = 0)]
         coarsen: u16,
+        /// Diffusion: size budget for --coarsen 0.
+        #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
+        max_bytes: usize,
         /// Also write Rust source with a `static` table to this file.
         #[arg(long)]
         rust: Option<PathBuf>,
@@ -216,6 +223,7 @@ fn main() -> Result<()> {
             faithful,
             table_kind,
             coarsen,
+            max_bytes,
             t_exp_ms,
             search_only,
             anytime_ms,
@@ -236,6 +244,7 @@ fn main() -> Result<()> {
                 table: TableOptions {
                     kind: kind_of(table_kind),
                     coarsen,
+                    max_bytes,
                 },
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
@@ -247,6 +256,7 @@ fn main() -> Result<()> {
             out,
             kind,
             coarsen,
+            max_bytes,
             rust,
             all_pairs,
         } => {
@@ -258,7 +268,11 @@ fn main() -> Result<()> {
                     let baked = bake::bake_diffusion(
                         &grid,
                         &Options::default(),
-                        &TableOptions { kind, coarsen },
+                        &TableOptions {
+                            kind,
+                            coarsen,
+                            max_bytes,
+                        },
                     )?;
                     let secs = t0.elapsed().as_secs_f64();
                     bake::write_file(&out, &baked.table)?;

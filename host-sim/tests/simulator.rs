@@ -166,8 +166,19 @@ fn reference_maps_bake_to_accurate_tables() {
         );
         assert!(r.orthogonality < 1e-12, "{}: {}", s.name, r.orthogonality);
         assert!(r.pearson > 0.8, "{}: {}", s.name, r.pearson);
-        let e = host_sim::bake::table_error(&baked, 5_000, 3).unwrap();
+        let full = TableOptions {
+            coarsen: 1,
+            ..TableOptions::default()
+        };
+        let fine = host_sim::bake::bake_diffusion(&s.map, &Options::default(), &full).unwrap();
+        let e = host_sim::bake::table_error(&fine, 5_000, 3).unwrap();
         assert!(e.max_abs <= e.bound, "{}: {e:?}", s.name);
+        // The default (flash) table fits the 192 KiB budget.
+        assert!(
+            baked.table.len() <= host_sim::diffusion::DEFAULT_MAX_BYTES,
+            "{}",
+            s.name
+        );
         // The planner's start and goals are on the table.
         let t = bi_am_rrt::DiffusionTable::new(&baked.table).unwrap();
         for p in std::iter::once(s.start).chain(s.goals.iter().copied()) {
