@@ -1,0 +1,75 @@
+//! The mission shared by the firmware example and its host twin: the same planner, map, seed,
+//! virtual clock and protocol, so both must print the same line, bit for bit.
+
+use core::fmt;
+
+use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
+use bi_am_rrt::builtin;
+use bi_am_rrt::clock::FakeClock;
+use bi_am_rrt::config::PlannerName;
+use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Storage};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+/// Two trees of 1024 nodes with 256 index buckets each: about 76 KiB of RAM.
+pub type MissionStorage = Storage<1024, 256>;
+
+/// What the mission measured.
+pub struct Mission {
+    pub planner: PlannerName,
+    pub scenario: &'static str,
+    pub result: RunResult,
+    pub work: u64,
+}
+
+impl Mission {
+    /// Whether the agent arrived without collision.
+    pub fn ok(&self) -> bool {
+        self.result.reached && self.result.collisions == 0
+    }
+}
+
+impl fmt::Display for Mission {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.result;
+        write!(
+            f,
+            "{} on {}: reached {}, search {} us (virtual), path {} m, {} collisions, {} nodes at goal, {} plan calls, {} work units",
+            self.planner,
+            self.scenario,
+            r.reached,
+            r.search_ticks.map_or(0, |t| t / 1_000),
+            r.travelled,
+            r.collisions,
+            r.nodes_at_goal.unwrap_or(0),
+            r.calls,
+            self.work
+        )
+    }
+}
+
+/// Bi-AM-RRT*(E) drives the agent across the built-in 40 m field (map in flash) under the
+/// benchmark protocol, on a virtual clock of 12 ns per work unit.
+pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
+    let scenario = &builtin::OPEN;
+    let map: Map<'static, 4> = Map::new(scenario.grid);
+    let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+    cfg.t_exp = core::time::Duration::from_millis(20);
+    let rng = XorShiftRng::seed_from_u64(1);
+    let mut planner = Planner::new(storage, map, Euclidean, rng, cfg, scenario.start).ok()?;
+    let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+    let result = run_to_goal(
+        &mut planner,
+        &clock,
+        scenario.goals[0],
+        &Protocol::default(),
+        |_, _, _| {},
+    )
+    .ok()?;
+    Some(Mission {
+        planner: cfg.name(),
+        scenario: scenario.name,
+        result,
+        work: clock.work(),
+    })
+}
