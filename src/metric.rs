@@ -445,7 +445,10 @@ mod tests {
             );
             // A point on the far edge belongs to the last column.
             assert_eq!(t.distance(Point::new(3.0, 0.2), Point::new(0.5, 0.5)), 2.0);
-            assert_eq!(t.distance(Point::new(3.0, 2.0), Point::new(0.5, 0.5)), f32::INFINITY);
+            assert_eq!(
+                t.distance(Point::new(3.0, 2.0), Point::new(0.5, 0.5)),
+                f32::INFINITY
+            );
             assert!(!t.covers(Point::new(2.5, 1.5)));
         }
     }

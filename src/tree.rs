@@ -373,39 +373,33 @@ impl<const N: usize> Tree<N> {
     /// Writes the path from the root to `to` (both included, root first) into `buf` and returns
     /// its number of nodes. `Err(BufferTooSmall)` leaves `buf`'s contents unspecified.
     pub fn path_ids(&self, to: NodeId, buf: &mut [NodeId]) -> Result<usize, TreeError> {
-        if !self.contains(to) {
-            return Err(TreeError::UnknownNode);
-        }
-        let mut n = 0;
-        let mut v = to.0;
-        while v != NONE {
-            let slot = buf.get_mut(n).ok_or(TreeError::BufferTooSmall)?;
-            *slot = NodeId(v);
-            n += 1;
-            if n > self.len as usize {
-                // Only a corrupted tree could get here; refuse rather than loop.
-                return Err(TreeError::WouldCycle);
-            }
-            v = self.parent[v as usize];
-        }
-        buf[..n].reverse();
-        Ok(n)
+        self.write_path(to, buf, NodeId)
     }
 
     /// Like [`Tree::path_ids`], writing positions.
     pub fn path_points(&self, to: NodeId, buf: &mut [Point]) -> Result<usize, TreeError> {
+        self.write_path(to, buf, |v| self.pos[v as usize])
+    }
+
+    /// Walks from `to` up to the root writing `item(node)` for each, then reverses.
+    fn write_path<T>(
+        &self,
+        to: NodeId,
+        buf: &mut [T],
+        item: impl Fn(u16) -> T,
+    ) -> Result<usize, TreeError> {
         if !self.contains(to) {
             return Err(TreeError::UnknownNode);
         }
         let mut n = 0;
         let mut v = to.0;
         while v != NONE {
-            let slot = buf.get_mut(n).ok_or(TreeError::BufferTooSmall)?;
-            *slot = self.pos[v as usize];
-            n += 1;
-            if n > self.len as usize {
+            if n >= self.len as usize {
+                // Only a corrupted tree could get here; refuse rather than loop.
                 return Err(TreeError::WouldCycle);
             }
+            *buf.get_mut(n).ok_or(TreeError::BufferTooSmall)? = item(v);
+            n += 1;
             v = self.parent[v as usize];
         }
         buf[..n].reverse();

@@ -189,25 +189,43 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
     };
     let run_wall_s = wall.elapsed().as_secs_f64();
     Ok(runs
-        .into_iter()
-        .map(|g| Row {
-            planner: cfg.name().to_string(),
-            scenario: prep.scenario.name.clone(),
-            goal_index: g.goal_index + 1,
-            seed,
-            reached: g.result.reached,
-            search_time_s: g.search_s,
-            path_length_m: g.result.travelled,
-            collisions: g.result.collisions,
-            nodes_at_goal: g.result.nodes_at_goal,
-            calls: g.result.calls,
-            cost_at_start_m: g.result.cost_at_start,
-            anytime_cost_m: if g.goal_index == 0 { anytime } else { None },
-            final_nodes,
-            clock: args.clock,
-            run_wall_s,
+        .iter()
+        .map(|g| {
+            let any = if g.goal_index == 0 { anytime } else { None };
+            row(prep, cfg, seed, g, args.clock, final_nodes, any, run_wall_s)
         })
         .collect())
+}
+
+/// The row of one goal of a run.
+#[allow(clippy::too_many_arguments)]
+pub fn row(
+    prep: &Prepared,
+    cfg: Config,
+    seed: u64,
+    g: &crate::sim::GoalRun,
+    clock: ClockKind,
+    final_nodes: usize,
+    anytime_cost_m: Option<f32>,
+    run_wall_s: f64,
+) -> Row {
+    Row {
+        planner: cfg.name().to_string(),
+        scenario: prep.scenario.name.clone(),
+        goal_index: g.goal_index + 1,
+        seed,
+        reached: g.result.reached,
+        search_time_s: g.search_s,
+        path_length_m: g.result.travelled,
+        collisions: g.result.collisions,
+        nodes_at_goal: g.result.nodes_at_goal,
+        calls: g.result.calls,
+        cost_at_start_m: g.result.cost_at_start,
+        anytime_cost_m,
+        final_nodes,
+        clock,
+        run_wall_s,
+    }
 }
 
 /// Groups rows by planner, scenario and goal, in first-seen order.

@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::{Circle, Config, Point};
-use serde::Serialize;
+use std::time::Instant;
+
+use crate::experiment::{Row, row};
 
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::draw::{self, Canvas};
@@ -30,17 +32,6 @@ pub struct RunArgs {
     pub obstacle: Option<f32>,
     /// Output directory.
     pub out: PathBuf,
-}
-
-#[derive(Serialize)]
-struct GoalJson {
-    goal_index: usize,
-    reached: bool,
-    search_time_s: Option<f64>,
-    path_length_m: f32,
-    collisions: u32,
-    nodes_at_goal: Option<usize>,
-    calls: u32,
 }
 
 fn picture(p: &SimPlanner<'_, '_>, trail: &[Point], scenario: &Scenario) -> Canvas {
@@ -79,7 +70,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let mut found_drawn = false;
     let mut dropped = false;
     let out = args.out.clone();
-    let runs = with_planner(&prep, cfg, args.seed, |p| {
+    let started = Instant::now();
+    let (runs, final_nodes) = with_planner(&prep, cfg, args.seed, |p| {
         let hook = |p: &mut SimPlanner<'_, '_>, _gi: usize, agent: Point, _call: u32| {
             if trail.last() != Some(&agent) {
                 trail.push(agent);
@@ -124,25 +116,29 @@ pub fn run(args: &RunArgs) -> Result<()> {
             )?,
         };
         picture(p, &trail, &prep.scenario).save(&out.join("final.png"))?;
-        Ok(runs)
+        Ok((runs, p.tree().len()))
     })?;
-    let json: Vec<GoalJson> = runs
+    let wall_s = started.elapsed().as_secs_f64();
+    let rows: Vec<Row> = runs
         .iter()
-        .map(|g| GoalJson {
-            goal_index: g.goal_index + 1,
-            reached: g.result.reached,
-            search_time_s: g.search_s,
-            path_length_m: g.result.travelled,
-            collisions: g.result.collisions,
-            nodes_at_goal: g.result.nodes_at_goal,
-            calls: g.result.calls,
+        .map(|g| {
+            row(
+                &prep,
+                cfg,
+                args.seed,
+                g,
+                args.clock,
+                final_nodes,
+                None,
+                wall_s,
+            )
         })
         .collect();
     println!(
         "{} on {} ({}), seed {}, {:?} clock",
         args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock
     );
-    for g in &json {
+    for g in &rows {
         println!(
             "  goal {}: reached {}, search time {}, path {:.2} m, {} collisions, {} nodes when found, {} plan calls",
             g.goal_index,
@@ -160,7 +156,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     }
     std::fs::write(
         args.out.join("result.json"),
-        serde_json::to_string_pretty(&json)?,
+        serde_json::to_string_pretty(&rows)?,
     )?;
     println!("  pictures and result.json in {}", args.out.display());
     Ok(())
