@@ -64,7 +64,8 @@ pub struct RunResult {
     pub calls: u32,
     /// Forward tree size when the goal joined.
     pub nodes_at_goal: Option<usize>,
-    /// Cost of the tree's path to the goal when the agent started moving.
+    /// Cost of the tree's path from the root to the goal when the agent started moving (the
+    /// root may already be a node ahead of the agent: it follows the agent's path).
     pub cost_at_start: Option<f32>,
     /// The last call's report.
     pub last: Option<Progress>,
