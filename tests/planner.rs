@@ -429,3 +429,39 @@ fn a_full_arena_is_reported_and_planning_goes_on() {
     assert!(r.reached && r.collisions == 0, "{r:?}");
     assert_eq!(p.tree().len(), 48);
 }
+
+#[test]
+fn a_goal_sequence_reuses_the_tree() {
+    let s = &builtin::MAZE;
+    let table = landmark_table(&s.grid, 8);
+    for cfg in [
+        Config::bi_am_rrt(MetricKind::Diffusion),
+        Config::rt_rrt(MetricKind::Euclidean).with_bidirectional(true),
+    ] {
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let mut p = planner_on(
+            &mut storage,
+            s,
+            DiffusionTable::new(&table).unwrap(),
+            cfg,
+            21,
+        );
+        let clock = clock();
+        let proto = Protocol {
+            speed: 2.0,
+            ..Protocol::default()
+        };
+        let mut nodes = 0;
+        for (i, goal) in s.goals.iter().enumerate() {
+            let r = drive(&mut p, &clock, *goal, proto, |_, _, _| {});
+            assert!(
+                r.reached && r.collisions == 0,
+                "{} goal {i}: {r:?}",
+                cfg.name()
+            );
+            assert!(p.tree().len() >= nodes, "the tree is kept between goals");
+            nodes = p.tree().len();
+            assert_eq!(p.root_position(), *goal);
+        }
+    }
+}
