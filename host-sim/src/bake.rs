@@ -189,6 +189,11 @@ pub struct TableError {
     pub bound: f64,
     /// Largest full-precision distance seen (for scale).
     pub max_distance: f64,
+    /// 99th percentile of the absolute difference.
+    pub p99_abs: f64,
+    /// Fraction of pairs whose difference exceeds `bound` (coarse tables trade exactness near
+    /// walls for size).
+    pub over_bound: f64,
 }
 
 /// Compares the baked table with the full-precision map on `pairs` seeded random node pairs.
@@ -199,11 +204,13 @@ pub fn table_error(b: &Baked, pairs: usize, seed: u64) -> Result<TableError> {
     let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(seed);
     let n = b.graph.len() as u64;
     let (mut max_abs, mut max_rel, mut max_d) = (0.0f64, 0.0f64, 0.0f64);
+    let mut errs = Vec::with_capacity(pairs);
     for _ in 0..pairs {
         let (i, j) = ((rng.next_u64() % n) as u32, (rng.next_u64() % n) as u32);
         let exact = b.map.distance(i, j);
         let got = t.distance(b.graph.position(i), b.graph.position(j)) as f64;
         let err = (got - exact).abs();
+        errs.push(err);
         max_abs = max_abs.max(err);
         if exact > 1.0 {
             max_rel = max_rel.max(err / exact);
@@ -215,12 +222,17 @@ pub fn table_error(b: &Baked, pairs: usize, seed: u64) -> Result<TableError> {
         bi_am_rrt::metric::ElementKind::I16 => (h.dims as f64).sqrt() * h.scale as f64,
         bi_am_rrt::metric::ElementKind::F32 => 0.0,
     };
+    let over = errs.iter().filter(|&&e| e > bound).count() as f64 / pairs.max(1) as f64;
+    errs.sort_by(f64::total_cmp);
+    let p99_abs = errs.get(errs.len() * 99 / 100).copied().unwrap_or(0.0);
     Ok(TableError {
         pairs,
         max_abs,
         max_rel,
         bound,
         max_distance: max_d,
+        p99_abs,
+        over_bound: over,
     })
 }
 

@@ -301,8 +301,15 @@ fn main() -> Result<()> {
                     println!("table: {} bytes -> {}", baked.table.len(), out.display());
                     let e = bake::table_error(&baked, 20_000, 1)?;
                     println!(
-                        "table vs full precision over {} node pairs: max error {:.3e} (relative {:.3e}; bound {:.3e}; largest distance {:.3e})",
-                        e.pairs, e.max_abs, e.max_rel, e.bound, e.max_distance
+                        "table vs full precision over {} node pairs: max error {:.3e} (relative {:.3e}), 99th percentile {:.3e}, \
+                         {:.2} % of pairs above the quantisation bound {:.3e}; largest distance {:.3e}",
+                        e.pairs,
+                        e.max_abs,
+                        e.max_rel,
+                        e.p99_abs,
+                        100.0 * e.over_bound,
+                        e.bound,
+                        e.max_distance
                     );
                     if let Some(rs) = rust {
                         let src = bake::rust_source("DIFFUSION_TABLE", &baked.table, &map);
