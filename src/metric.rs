@@ -44,6 +44,14 @@ pub trait Metric {
     fn is_euclidean(&self) -> bool {
         false
     }
+
+    /// Work done by `distance` calls since the last `take_work`, in the planner's work units
+    /// (one unit: about one grid cell or graph edge visited), beyond the flat 2 units the
+    /// planner charges per call. A metric whose cost varies (one computing a distance field
+    /// on a cache miss) reports it here so that a virtual clock stays faithful. Default: 0.
+    fn take_work(&self) -> u32 {
+        0
+    }
 }
 
 impl<M: Metric + ?Sized> Metric for &M {
@@ -52,6 +60,9 @@ impl<M: Metric + ?Sized> Metric for &M {
     }
     fn is_euclidean(&self) -> bool {
         (**self).is_euclidean()
+    }
+    fn take_work(&self) -> u32 {
+        (**self).take_work()
     }
 }
 

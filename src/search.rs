@@ -161,10 +161,11 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
         self.map.free_path(a, b)
     }
 
-    /// `d_A`, charged.
+    /// `d_A`, charged (2 units plus what the metric reports).
     pub fn metric<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> f32 {
-        meter.charge(2);
-        self.metric.distance(a, b)
+        let d = self.metric.distance(a, b);
+        meter.charge(2u32.saturating_add(self.metric.take_work()));
+        d
     }
 
     /// The `Nearby` radius: `e_max` for AM-RRT*; RT-RRT*'s shrinking

@@ -10,7 +10,9 @@
 //! a cache of at most `max_fields` fields (`4 n` bytes each). A query whose target (or source:
 //! the metric is symmetric) has a cached field costs one lookup. Preparation is only the graph
 //! build. Targets the planner asks for again and again (the goal, the reverse tree's target)
-//! are computed once; a random sample the tree steers towards costs one Dijkstra run.
+//! are computed once; a random sample the tree steers towards costs one Dijkstra run. That work
+//! (one unit per edge relaxed) is reported to the planner through `Metric::take_work`, so the
+//! virtual clock charges it.
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -29,6 +31,8 @@ pub struct Geodesic {
     max_fields: usize,
     scratch: RefCell<Vec<f64>>,
     runs: Cell<u64>,
+    /// Edges relaxed by Dijkstra runs not yet reported through `take_work`.
+    work: Cell<u64>,
 }
 
 impl Geodesic {
@@ -40,6 +44,7 @@ impl Geodesic {
             max_fields: max_fields.max(1),
             scratch: RefCell::new(Vec::new()),
             runs: Cell::new(0),
+            work: Cell::new(0),
         }
     }
 
@@ -62,6 +67,9 @@ impl Geodesic {
         let mut scratch = self.scratch.borrow_mut();
         self.graph.dijkstra(node, &mut scratch);
         self.runs.set(self.runs.get() + 1);
+        // One work unit per directed edge (a Dijkstra run relaxes each once).
+        self.work
+            .set(self.work.get() + self.graph.edge_count() as u64);
         let field: Rc<[f32]> = scratch.iter().map(|&d| d as f32).collect();
         let mut fields = self.fields.borrow_mut();
         if fields.len() >= self.max_fields {
@@ -89,6 +97,10 @@ impl Metric for Geodesic {
         };
         d * self.graph.cell
     }
+
+    fn take_work(&self) -> u32 {
+        u32::try_from(self.work.replace(0)).unwrap_or(u32::MAX)
+    }
 }
 
 /// Any of the metrics a run can use.
@@ -113,6 +125,13 @@ impl Metric for AnyMetric<'_> {
     fn is_euclidean(&self) -> bool {
         matches!(self, Self::Euclidean)
     }
+
+    fn take_work(&self) -> u32 {
+        match self {
+            Self::Geodesic(g) => g.take_work(),
+            _ => 0,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -131,6 +150,12 @@ mod tests {
         assert!(d > 10.0, "around the wall: {d}");
         assert_eq!(m.distance(b, a), d);
         assert_eq!(m.dijkstra_runs(), 1, "the second query reuses the field");
+        assert_eq!(
+            m.take_work() as usize,
+            m.graph.edge_count(),
+            "one run reported"
+        );
+        assert_eq!(m.take_work(), 0);
         assert_eq!(m.distance(a, Point::new(5.5, 3.5)), f32::INFINITY);
         let e = m.distance(a, Point::new(3.5, 4.5));
         assert!((e - 3.0).abs() < 1e-6);
