@@ -38,15 +38,21 @@ pub trait Clock {
 
     /// A duration in this clock's ticks (rounded down, saturating).
     fn ticks(&self, d: Duration) -> u64 {
-        let t = d.as_nanos() * self.ticks_per_second() as u128 / 1_000_000_000;
+        // Saturating: `Duration::MAX` on a fast clock overflows even u128.
+        let t = d
+            .as_nanos()
+            .checked_mul(self.ticks_per_second() as u128)
+            .map_or(u128::MAX, |t| t / 1_000_000_000);
         u64::try_from(t).unwrap_or(u64::MAX)
     }
 
     /// A tick count of this clock as a duration.
     fn duration(&self, ticks: u64) -> Duration {
-        let rate = self.ticks_per_second().max(1) as u128;
-        let ns = ticks as u128 * 1_000_000_000 / rate;
-        Duration::from_nanos(u64::try_from(ns).unwrap_or(u64::MAX))
+        let rate = self.ticks_per_second().max(1);
+        let (secs, rest) = (ticks / rate, ticks % rate);
+        // rest < rate, so rest * 10^9 / rate < 10^9 fits a u32.
+        let nanos = (rest as u128 * 1_000_000_000 / rate as u128) as u64;
+        Duration::from_secs(secs).saturating_add(Duration::from_nanos(nanos))
     }
 }
 
@@ -117,25 +123,37 @@ impl Deadline {
 }
 
 /// Counts the work the planner does and reports it to the clock in batches, so a virtual clock
-/// advances with work while a real clock is read as usual.
+/// advances with work while a real clock is read as usual. A meter may also carry a *work
+/// cap*: once that many units have been charged, every deadline reads as expired, whatever the
+/// clock says. This is what bounds a planner call on a clock that never advances.
 #[derive(Debug)]
 pub struct Meter<'c, C: Clock + ?Sized> {
     clock: &'c C,
     pending: Cell<u32>,
+    used: Cell<u64>,
+    cap: u64,
 }
 
 impl<'c, C: Clock + ?Sized> Meter<'c, C> {
-    /// A meter over `clock`.
+    /// A meter over `clock` without a work cap.
     pub fn new(clock: &'c C) -> Self {
+        Self::with_cap(clock, u64::MAX)
+    }
+
+    /// A meter over `clock` whose deadlines all expire once `cap` units have been charged.
+    pub fn with_cap(clock: &'c C, cap: u64) -> Self {
         Self {
             clock,
             pending: Cell::new(0),
+            used: Cell::new(0),
+            cap,
         }
     }
 
     /// Records `units` of work.
     #[inline]
     pub fn charge(&self, units: u32) {
+        self.used.set(self.used.get().saturating_add(units as u64));
         let p = self.pending.get().saturating_add(units);
         if p >= 4096 {
             self.clock.charge(p);
@@ -143,6 +161,16 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
         } else {
             self.pending.set(p);
         }
+    }
+
+    /// Work units charged since the meter was made.
+    pub fn work(&self) -> u64 {
+        self.used.get()
+    }
+
+    /// Whether the work cap is reached.
+    pub fn exhausted(&self) -> bool {
+        self.used.get() >= self.cap
     }
 
     /// Reports pending work, then reads the clock.
@@ -154,7 +182,7 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
     /// Reports pending work, then tells whether `deadline` has passed.
     pub fn expired(&self, deadline: &Deadline) -> bool {
         self.flush();
-        deadline.expired(self.clock)
+        self.exhausted() || deadline.expired(self.clock)
     }
 
     /// A deadline `budget` from now, never later than `outer`.
@@ -310,5 +338,31 @@ mod tests {
         assert_eq!(c.work(), 15);
         assert_eq!(c.duration(1_500_000), Duration::from_micros(1_500));
         assert_eq!(c.ticks(Duration::from_secs(u64::MAX)), u64::MAX);
+    }
+
+    /// Issue 7, case 3: `ticks()` overflowed u128 with a fast clock and `Duration::MAX`.
+    #[test]
+    fn regression_ticks_overflow_with_a_fast_clock() {
+        let fast = FakeClock::new(u64::MAX);
+        assert_eq!(fast.ticks(Duration::MAX), u64::MAX);
+        assert_eq!(fast.duration(u64::MAX), Duration::from_secs(1));
+        assert_eq!(
+            FakeClock::new(1).duration(u64::MAX),
+            Duration::from_secs(u64::MAX)
+        );
+        let d = Deadline::after(&fast, Duration::MAX);
+        assert!(!d.expired(&fast));
+    }
+
+    #[test]
+    fn a_work_cap_expires_every_deadline() {
+        let frozen = FakeClock::nanos();
+        let meter = Meter::with_cap(&frozen, 100);
+        let never = Deadline::after(&frozen, Duration::from_secs(10));
+        assert!(!meter.expired(&never));
+        meter.charge(99);
+        assert!(!meter.expired(&never));
+        meter.charge(1);
+        assert!(meter.expired(&never) && meter.work() == 100);
     }
 }

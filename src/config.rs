@@ -5,6 +5,8 @@
 use core::fmt;
 use core::time::Duration;
 
+use crate::error::ConfigError;
+
 /// The base real-time planner.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -94,6 +96,12 @@ pub struct Config {
     /// Hard cap on expansions per `plan` call, whatever the clock says (a frozen clock still
     /// gives bounded calls).
     pub max_expansions_per_call: u32,
+    /// Hard cap on the work of one `plan` or `grow` call, in work units (one grid cell tested,
+    /// node visited or metric evaluated; about 12 ns each on the development machine and about
+    /// 200 instructions on a Cortex-M4F): once reached, every budget of the call reads as
+    /// spent, whatever the clock says. The default, 25,000,000, is twice the paper's `t_exp`
+    /// of 150 ms on the development machine. See [`crate::Planner::plan`] for the bound.
+    pub max_work_per_call: u32,
     /// Probability threshold above which the goal (or RT-RRT*'s goal line) is sampled while
     /// the goal is not in the tree (paper: 0.7).
     pub p_goal: f32,
@@ -124,6 +132,7 @@ impl Config {
             sample_attempts: 64,
             rewire_mode: RewireMode::PerExpansion { visits: 24 },
             max_expansions_per_call: 20_000,
+            max_work_per_call: 25_000_000,
             p_goal: 0.7,
             p_uniform: 0.7 / 1.5,
         }
@@ -206,6 +215,39 @@ impl Config {
     /// The configuration with this Table 1 name (e.g. `"Bi-AM-RRT*(D)"`, `"RT-RRT*-2"`).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::table1().into_iter().find(|c| c.name() == name)
+    }
+
+    /// Checks every field; the error names the first field out of range. A configuration that
+    /// passes gives a planner that grows: `t_exp` is not zero, `e_max` is finite and positive,
+    /// `sigma` finite and not negative, `n_max`, the sampling and steering counts and both
+    /// per-call caps at least 1, and the two probabilities in `[0, 1]`.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let unit = |p: f32| (0.0..=1.0).contains(&p);
+        let checks = [
+            (!self.t_exp.is_zero(), ConfigError::TExp),
+            (
+                self.e_max.is_finite() && self.e_max > 0.0,
+                ConfigError::EMax,
+            ),
+            (self.n_max >= 1, ConfigError::NMax),
+            (
+                self.sigma.is_finite() && self.sigma >= 0.0,
+                ConfigError::Sigma,
+            ),
+            (self.steer_candidates >= 1, ConfigError::SteerCandidates),
+            (self.sample_attempts >= 1, ConfigError::SampleAttempts),
+            (
+                self.max_expansions_per_call >= 1,
+                ConfigError::MaxExpansions,
+            ),
+            (self.max_work_per_call >= 1, ConfigError::MaxWork),
+            (unit(self.p_goal), ConfigError::PGoal),
+            (unit(self.p_uniform), ConfigError::PUniform),
+        ];
+        match checks.iter().find(|(ok, _)| !ok) {
+            Some(&(_, e)) => Err(e),
+            None => Ok(()),
+        }
     }
 
     /// The paper's name of this configuration (a `Display` value).
@@ -298,5 +340,38 @@ mod tests {
         );
         assert!(Config::from_name("Bi-AM-RRT*").is_none());
         assert!(Config::from_name("AM-RRT*(D)-12").is_none());
+    }
+
+    /// Issue 7, case 7: NaN or negative `e_max`, `sigma`, zero budgets and `p_goal > 1` were
+    /// accepted and gave a planner that silently never grew.
+    #[test]
+    fn regression_silent_misconfiguration_is_refused() {
+        for c in Config::table1() {
+            assert_eq!(c.validate(), Ok(()));
+        }
+        let base = Config::bi_am_rrt(MetricKind::Diffusion);
+        type Case = (fn(&mut Config), ConfigError);
+        let cases: [Case; 12] = [
+            (|c| c.e_max = f32::NAN, ConfigError::EMax),
+            (|c| c.e_max = -1.0, ConfigError::EMax),
+            (|c| c.e_max = f32::INFINITY, ConfigError::EMax),
+            (|c| c.sigma = f32::NAN, ConfigError::Sigma),
+            (|c| c.sigma = -3.0, ConfigError::Sigma),
+            (|c| c.t_exp = Duration::ZERO, ConfigError::TExp),
+            (|c| c.p_goal = 1.5, ConfigError::PGoal),
+            (|c| c.p_uniform = f32::NAN, ConfigError::PUniform),
+            (|c| c.n_max = 0, ConfigError::NMax),
+            (|c| c.sample_attempts = 0, ConfigError::SampleAttempts),
+            (
+                |c| c.max_expansions_per_call = 0,
+                ConfigError::MaxExpansions,
+            ),
+            (|c| c.max_work_per_call = 0, ConfigError::MaxWork),
+        ];
+        for (set, want) in cases {
+            let mut c = base;
+            set(&mut c);
+            assert_eq!(c.validate(), Err(want));
+        }
     }
 }

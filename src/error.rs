@@ -33,8 +33,9 @@ error_enum! {
         EmptyGrid => "grid width and height must be positive",
         /// The byte slice holds fewer than `ceil(width * height / 8)` bytes.
         BufferTooShort => "occupancy buffer shorter than width * height bits",
-        /// The cell size is not a finite positive number.
-        BadCellSize => "cell size must be finite and positive",
+        /// The cell size is not a finite positive number, or its inverse or the map's extent
+        /// is not finite.
+        BadCellSize => "cell size must be finite and positive, with a finite inverse and extent",
     }
 }
 
@@ -54,6 +55,68 @@ error_enum! {
 }
 
 error_enum! {
+    /// A [`crate::Config`] field out of range (named by the variant).
+    pub enum ConfigError {
+        /// `t_exp` is zero: no call would ever plan.
+        TExp => "t_exp must be longer than zero",
+        /// `e_max` is not finite and positive.
+        EMax => "e_max must be finite and positive",
+        /// `n_max` is zero.
+        NMax => "n_max must be at least 1",
+        /// `sigma` is NaN, infinite or negative.
+        Sigma => "sigma must be finite and not negative",
+        /// `steer_candidates` is zero.
+        SteerCandidates => "steer_candidates must be at least 1",
+        /// `sample_attempts` is zero.
+        SampleAttempts => "sample_attempts must be at least 1",
+        /// `max_expansions_per_call` is zero.
+        MaxExpansions => "max_expansions_per_call must be at least 1",
+        /// `max_work_per_call` is zero.
+        MaxWork => "max_work_per_call must be at least 1",
+        /// `p_goal` is outside `[0, 1]` or NaN.
+        PGoal => "p_goal must lie in [0, 1]",
+        /// `p_uniform` is outside `[0, 1]` or NaN.
+        PUniform => "p_uniform must lie in [0, 1]",
+    }
+}
+
+/// Why a planner could not be made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SetupError {
+    /// A configuration field is out of range.
+    Config(ConfigError),
+    /// The start position is refused.
+    Start(InputError),
+    /// The map is too large for the spatial index to cover (its size overflows `f32`).
+    Map,
+}
+
+impl core::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Config(e) => write!(f, "bad configuration: {e}"),
+            Self::Start(e) => write!(f, "bad start: {e}"),
+            Self::Map => f.write_str("map too large for the spatial index"),
+        }
+    }
+}
+
+impl core::error::Error for SetupError {}
+
+impl From<ConfigError> for SetupError {
+    fn from(e: ConfigError) -> Self {
+        Self::Config(e)
+    }
+}
+
+impl From<InputError> for SetupError {
+    fn from(e: InputError) -> Self {
+        Self::Start(e)
+    }
+}
+
+error_enum! {
     /// A tree operation that could not be carried out; the tree is unchanged.
     pub enum TreeError {
         /// The arena holds its capacity of nodes.
@@ -64,6 +127,8 @@ error_enum! {
         WouldCycle => "edge would create a cycle",
         /// The caller's buffer is too small for the path.
         BufferTooSmall => "path buffer too small",
+        /// The node has children, or is the root: only a leaf can be removed.
+        NotALeaf => "only a leaf that is not the root can be removed",
     }
 }
 

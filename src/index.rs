@@ -81,19 +81,29 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         if !(good(width) && good(height) && good(min_side)) {
             return false;
         }
-        let area_side = libm::sqrtf(width * height / B as f32);
-        let mut side = min_side.max(area_side);
-        let count = |s: f32| (libm::ceilf(width / s), libm::ceilf(height / s));
+        // In f64: width * height overflows f32 for maps near its range.
+        let (w, h) = (width as f64, height as f64);
+        let area_side = libm::sqrt(w * h / B as f64);
+        let mut side = (min_side as f64).max(area_side);
+        let count = |s: f64| (libm::ceil(w / s).max(1.0), libm::ceil(h / s).max(1.0));
         // Rounding up can overshoot B a little: grow the side until it fits (a few steps).
         for _ in 0..64 {
             let (c, r) = count(side);
-            if c * r <= B as f32 {
+            if c * r <= B as f64 {
                 break;
             }
             side *= 1.05;
         }
         let (c, r) = count(side);
-        if c * r > B as f32 {
+        let side = side as f32;
+        // The grid's extent and the inverse side must stay finite and positive in f32.
+        let usable = |v: f32| v.is_finite() && v > 0.0;
+        if c * r > B as f64
+            || !usable(side)
+            || !usable(1.0 / side)
+            || !usable(c as f32 * side)
+            || !usable(r as f32 * side)
+        {
             return false;
         }
         self.clear();
@@ -208,8 +218,8 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         // the grid rectangle (points lie in it and projection onto a convex set does not
         // increase distances), so ring bounds are computed from the projection.
         let qp = Point::new(
-            q.x.clamp(0.0, self.cols as f32 * self.side),
-            q.y.clamp(0.0, self.rows as f32 * self.side),
+            q.x.max(0.0).min(self.cols as f32 * self.side),
+            q.y.max(0.0).min(self.rows as f32 * self.side),
         );
         let max_ring = (qc.max(self.cols as i32 - 1 - qc)).max(qr.max(self.rows as i32 - 1 - qr));
         let mut best: Option<(NodeId, f32)> = None;
@@ -302,8 +312,8 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
 
     fn bucket_coords(&self, p: Point) -> (u16, u16) {
         // Saturating float-to-int casts map NaN and negatives to 0; clamp the far side.
-        let c = ((p.x * self.inv_side) as u32).min(self.cols as u32 - 1) as u16;
-        let r = ((p.y * self.inv_side) as u32).min(self.rows as u32 - 1) as u16;
+        let c = ((p.x * self.inv_side) as u32).min((self.cols as u32).saturating_sub(1)) as u16;
+        let r = ((p.y * self.inv_side) as u32).min((self.rows as u32).saturating_sub(1)) as u16;
         (c, r)
     }
 
@@ -383,6 +393,41 @@ mod tests {
         assert!(c as usize * r as usize <= 16);
         assert!(idx.bucket_side() >= 25.0);
         assert!(SpatialIndex::<16, 16>::with_bounds(f32::NAN, 1.0, 1.0).is_none());
+    }
+
+    /// Issue 7, case 3: `with_bounds(1e20, 1e20, 1.0)` overflowed width x height to infinity,
+    /// left a 0 x 0 bucket grid, and `nearest()` panicked (in `f32::clamp`, and on `cols - 1`).
+    #[test]
+    fn regression_huge_bounds_do_not_panic() {
+        let pts = [Point::new(5.0e19, 5.0e19), Point::new(1.0, 1.0)];
+        for (w, h, side) in [
+            (1.0e20, 1.0e20, 1.0),
+            (3.0e38, 3.0e38, 1.0),
+            (2.0e19, 2.0e19, 1.0e19),
+            (1.0, 1.0, 3.0e38),
+        ] {
+            let Some(mut idx) = SpatialIndex::<8, 16>::with_bounds(w, h, side) else {
+                continue;
+            };
+            let (c, r) = idx.shape();
+            assert!(c >= 1 && r >= 1 && c as usize * r as usize <= 16, "{w} {h}");
+            idx.insert(NodeId(0), pts[0]).unwrap();
+            idx.insert(NodeId(1), pts[1]).unwrap();
+            assert_eq!(
+                idx.nearest(Point::new(0.0, 0.0), &pts).unwrap().0,
+                NodeId(1)
+            );
+            let mut out = heapless::Vec::<NodeId, 4>::new();
+            idx.within(Point::new(0.0, 0.0), 10.0, &pts, &mut out);
+            assert_eq!(out.as_slice(), &[NodeId(1)]);
+        }
+        // The default (unshaped) index answers too.
+        let mut idx = SpatialIndex::<8, 16>::new();
+        idx.insert(NodeId(1), pts[1]).unwrap();
+        assert_eq!(
+            idx.nearest(Point::new(1.0e30, -4.0), &pts).unwrap().0,
+            NodeId(1)
+        );
     }
 
     #[test]

@@ -92,7 +92,7 @@ pub use config::{Base, Config, MetricKind, RewireMode};
 pub use geometry::Point;
 pub use map::{Circle, Map, OccupancyGrid};
 pub use metric::{DiffusionTable, Euclidean, Metric};
-pub use planner::{Planner, Progress, Stats, Storage};
+pub use planner::{PathInfo, Planner, Progress, Stats, Status, Storage, Wait};
 
 /// The README's example is compiled and run by `cargo test --doc`.
 #[cfg(doctest)]

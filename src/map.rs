@@ -69,7 +69,11 @@ impl<'a> OccupancyGrid<'a> {
         if width == 0 || height == 0 {
             return Err(MapError::EmptyGrid);
         }
-        if !(cell_size.is_finite() && cell_size > 0.0) {
+        // The inverse and the map's extent must be finite too: a subnormal cell (1e-40) has an
+        // infinite inverse, and 65,535 huge cells overflow f32.
+        let inv = 1.0 / cell_size;
+        let extent = (if width > height { width } else { height }) as f32 * cell_size;
+        if !(cell_size.is_finite() && cell_size > 0.0 && inv.is_finite() && extent.is_finite()) {
             return Err(MapError::BadCellSize);
         }
         if bits.len() < Self::bytes_needed(width, height) {
@@ -80,7 +84,7 @@ impl<'a> OccupancyGrid<'a> {
             width,
             height,
             cell: cell_size,
-            inv_cell: 1.0 / cell_size,
+            inv_cell: inv,
         })
     }
 
@@ -520,6 +524,22 @@ mod tests {
         // Vertical along x = 2 touches the right edge of (1, 1).
         assert!(!g.segment_free(Point::new(2.0, 0.5), Point::new(2.0, 3.5)));
         assert!(g.segment_free(Point::new(2.01, 0.5), Point::new(2.01, 3.5)));
+    }
+
+    /// Issue 7, case 3: a subnormal cell size (1e-40) was accepted and `1 / cell` was infinite.
+    #[test]
+    fn regression_subnormal_and_overflowing_cell_sizes_are_refused() {
+        let bits = [0u8; 2];
+        for cell in [1.0e-40, f32::MIN_POSITIVE / 8.0, 1.0e38, f32::MAX] {
+            assert_eq!(
+                OccupancyGrid::new(&bits, 4, 4, cell).unwrap_err(),
+                MapError::BadCellSize,
+                "{cell}"
+            );
+        }
+        let g = OccupancyGrid::new(&bits, 4, 4, 1.0e19).unwrap();
+        assert!(g.width_m().is_finite());
+        assert!(g.segment_free(Point::new(1.0e19, 1.0e19), Point::new(3.0e19, 2.0e19)));
     }
 
     #[test]

@@ -172,9 +172,19 @@ pub struct TableHeader {
 }
 
 impl TableHeader {
-    /// Payload size in bytes.
-    pub fn payload_len(&self) -> usize {
-        self.cols as usize * self.rows as usize * self.dims as usize * self.kind.size()
+    /// Payload size in bytes; `None` when it does not fit the target's `usize` (a header
+    /// claiming 8192 x 8192 cells of 32 `f32` is 8 GiB: more than a 32-bit address space).
+    pub fn payload_len(&self) -> Option<usize> {
+        let len = (self.cols as u64)
+            .checked_mul(self.rows as u64)?
+            .checked_mul(self.dims as u64)?
+            .checked_mul(self.kind.size() as u64)?;
+        usize::try_from(len).ok()
+    }
+
+    /// Payload plus header, in bytes: the table's whole size.
+    pub fn table_len(&self) -> Option<usize> {
+        self.payload_len()?.checked_add(TABLE_HEADER_LEN)
     }
 
     /// The 32 header bytes for a payload with this checksum.
@@ -260,8 +270,10 @@ impl<'a> DiffusionTable<'a> {
             cell_size,
             scale,
         };
+        // A payload larger than the address space cannot be present: truncated.
+        let end = header.table_len().ok_or(TableError::Truncated)?;
         let payload = bytes
-            .get(TABLE_HEADER_LEN..TABLE_HEADER_LEN + header.payload_len())
+            .get(TABLE_HEADER_LEN..end)
             .ok_or(TableError::Truncated)?;
         if fnv1a32(payload) != checksum {
             return Err(TableError::BadChecksum);
@@ -304,17 +316,19 @@ impl<'a> DiffusionTable<'a> {
     /// Reads coordinate `d` of `cell` as stored (before scaling); `None` if unreachable.
     #[inline]
     fn element(&self, cell: usize, d: usize) -> Option<f32> {
+        // Checked: on a 32-bit target a bogus cell could overflow the offset (a validated
+        // table never does, since the whole payload fits the address space).
         let k = self.header.dims as usize;
         let size = self.header.kind.size();
-        let at = (cell * k + d) * size;
-        let bytes = self.payload.get(at..at + size)?;
+        let at = cell.checked_mul(k)?.checked_add(d)?.checked_mul(size)?;
+        let bytes = self.payload.get(at..at.checked_add(size)?)?;
         match self.header.kind {
             ElementKind::I16 => {
-                let v = i16::from_le_bytes([bytes[0], bytes[1]]);
+                let v = i16::from_le_bytes(bytes.try_into().ok()?);
                 (v != i16::MIN).then_some(v as f32)
             }
             ElementKind::F32 => {
-                let v = f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+                let v = f32::from_le_bytes(bytes.try_into().ok()?);
                 (!v.is_nan()).then_some(v)
             }
         }
@@ -378,7 +392,7 @@ where
     if k == 0 || k > TABLE_MAX_DIMS || !(header.scale.is_finite() && header.scale > 0.0) {
         return None;
     }
-    let total = TABLE_HEADER_LEN + header.payload_len();
+    let total = header.table_len()?;
     let out = out.get_mut(..total)?;
     let (head, payload) = out.split_at_mut(TABLE_HEADER_LEN);
     let mut buf = [0f32; TABLE_MAX_DIMS];
@@ -462,6 +476,42 @@ mod tests {
             );
             assert!(!t.covers(Point::new(2.5, 1.5)));
         }
+    }
+
+    /// Issue 7, case 5: on a 32-bit target `payload_len` overflowed `usize`, and a 32-byte table
+    /// whose header claims 8192 x 8192 cells of 32 `f32` was accepted (payload length 0). The
+    /// same check runs on the Cortex-M4F under QEMU (`examples/table32.rs`).
+    #[test]
+    fn regression_table_size_overflow_is_refused() {
+        let claims = TableHeader {
+            kind: ElementKind::F32,
+            dims: 32,
+            cols: 8192,
+            rows: 8192,
+            cell_size: 1.0,
+            scale: 1.0,
+        };
+        let bogus = claims.to_bytes(fnv1a32(&[]));
+        assert_eq!(
+            DiffusionTable::new(&bogus).unwrap_err(),
+            TableError::Truncated
+        );
+        let expected = 8192u64 * 8192 * 32 * 4;
+        assert_eq!(
+            claims.payload_len().map(|n| n as u64),
+            usize::try_from(expected).ok().map(|n| n as u64)
+        );
+        let largest = TableHeader {
+            cols: u16::MAX,
+            rows: u16::MAX,
+            ..claims
+        };
+        assert_eq!(
+            DiffusionTable::new(&largest.to_bytes(0)).unwrap_err(),
+            TableError::Truncated
+        );
+        let mut out = [0u8; 64];
+        assert!(write_table(&largest, &mut out, |_, _, _| true).is_none());
     }
 
     #[test]

@@ -39,12 +39,12 @@ use rand_core::Rng;
 
 use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config, RewireMode};
-use crate::error::{InputError, ObstacleError, TreeError};
+use crate::error::{InputError, ObstacleError, SetupError, TreeError};
 use crate::geometry::Point;
 use crate::map::{Circle, Map, ObstacleId};
 use crate::metric::Metric;
 use crate::rewire::Slice;
-use crate::search::{Env, Target, TreeStore};
+use crate::search::{Env, Near, Target, TreeStore};
 use crate::tree::{Cost, NodeId, Tree};
 
 /// Storage for a planner's two trees: `N` nodes and `B` index buckets each. Keep it wherever
@@ -66,12 +66,52 @@ impl<const N: usize, const B: usize> Storage<N, B> {
     }
 }
 
+/// What the planner is doing, in words a firmware can act on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Status {
+    /// No goal is set: the tree grows, the waypoint is the root.
+    NoGoal,
+    /// The goal is not in the tree yet; the waypoint leads towards the tree node nearest it.
+    Searching,
+    /// The goal is in the tree over a free path: follow the waypoints.
+    Following,
+    /// The agent stands on the goal.
+    Arrived,
+    /// The agent holds (the waypoint is where it is, or the node it is already heading to),
+    /// for the reason given. Nothing is lost: the tree keeps growing and rewiring, and the
+    /// agent goes on once the way is free.
+    Waiting(Wait),
+    /// The assisting metric places the goal at an infinite distance from the agent: no path
+    /// can be found from here (the agent holds).
+    Unreachable,
+}
+
+/// Why the agent holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Wait {
+    /// Every path the tree holds to the goal crosses a dynamic obstacle; rewiring looks for a
+    /// way around (or the obstacle may leave).
+    PathBlocked,
+    /// The agent stands inside a dynamic obstacle: any motion would cross it.
+    AgentInObstacle,
+    /// A dynamic obstacle lies between the agent and every tree node it could go to.
+    AgentBlocked,
+}
+
 /// What a `plan` call did and where the agent should go.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Progress {
-    /// The next waypoint: the forward tree's root.
+    /// The next waypoint: reachable from the agent's position over a segment free of the map
+    /// and of every dynamic obstacle present, or the agent's own position when none is (then
+    /// `status` says why).
     pub waypoint: Point,
+    /// What the planner is doing.
+    pub status: Status,
+    /// Work units done in this call (see [`Planner::plan`] for the bound).
+    pub work: u64,
     /// Whether the goal is a node of the forward tree.
     pub goal_in_tree: bool,
     /// Cost of the path from the root to the goal, once the goal is in the tree.
@@ -88,6 +128,18 @@ pub struct Progress {
     pub tree_full: bool,
 }
 
+/// What [`Planner::path`] wrote.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PathInfo {
+    /// Points written, root first.
+    pub len: usize,
+    /// The path ends at the goal (false: at the tree node nearest it, or at the root).
+    pub to_goal: bool,
+    /// Some edge of the path crosses a dynamic obstacle: not a path to drive.
+    pub blocked: bool,
+}
+
 /// Counters over the planner's life since the goal was set.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -102,6 +154,11 @@ pub struct Stats {
     pub reverse_expansions: u64,
     /// Whether the goal joined through a meet of the two trees.
     pub met: bool,
+    /// Times the agent was found off the tree's root (a dynamic obstacle between them, or the
+    /// agent moved elsewhere) and the tree was re-rooted at the agent.
+    pub reanchored: u32,
+    /// Times no tree node could reach the agent and the forward tree restarted from it.
+    pub restarted: u32,
 }
 
 /// The planner. `N` nodes and `B` buckets per tree, up to `K` dynamic obstacles; `M` the
@@ -124,8 +181,9 @@ pub struct Planner<'s, 'm, M, R, const N: usize, const B: usize, const K: usize>
 impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     Planner<'s, 'm, M, R, N, B, K>
 {
-    /// A planner at `start` on `map`. Errors when `start` is not finite, outside the map or in
-    /// an obstacle.
+    /// A planner at `start` on `map`. Errors name the problem: a configuration field out of
+    /// range ([`Config::validate`]), a start that is not finite, outside the map or in an
+    /// obstacle, or a map too large to index.
     pub fn new(
         storage: &'s mut Storage<N, B>,
         map: Map<'m, K>,
@@ -133,13 +191,22 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         rng: R,
         cfg: Config,
         start: Point,
-    ) -> Result<Self, InputError> {
-        map.check_point(start)?;
+    ) -> Result<Self, SetupError> {
+        cfg.validate()?;
         let (w, h) = (map.grid().width_m(), map.grid().height_m());
+        // Squared distances must neither overflow across the map nor underflow at the
+        // duplicate scale (1e-4 cell): cells from about 1e-15 m, maps up to about 1e19 m.
+        let dup = crate::search::DUPLICATE * map.grid().cell_size();
+        if !(w * w + h * h).is_finite() || dup * dup < f32::MIN_POSITIVE {
+            return Err(SetupError::Map);
+        }
+        map.check_point(start)?;
         let side = cfg.e_max.max(map.grid().cell_size());
         let Storage { forward, reverse } = storage;
         for store in [&mut *forward, &mut *reverse] {
-            store.index.reshape(w, h, side);
+            if !store.index.reshape(w, h, side) {
+                return Err(SetupError::Map);
+            }
         }
         forward.reset(start);
         reverse.clear();
@@ -212,11 +279,18 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.metric.distance(root, goal).is_finite() {
             return Err(InputError::Unreachable);
         }
+        self.stats = Stats::default();
+        self.begin_search(goal);
+        Ok(())
+    }
+
+    /// Starts the search for `goal` from the current forward tree (goal not joined yet).
+    fn begin_search(&mut self, goal: Point) {
+        let root = self.root_position();
         self.goal = Some(Target {
             pos: goal,
             node: None,
         });
-        self.stats = Stats::default();
         self.fwd.restart_goal_sweep();
         if self.cfg.bidirectional {
             self.rev.reset(goal);
@@ -228,7 +302,6 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             self.rev.clear();
             self.rev_goal = None;
         }
-        Ok(())
     }
 
     /// Forgets the goal; the tree stays.
@@ -286,22 +359,54 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.fwd.nearest(&env, goal.pos, meter)
     }
 
-    /// Writes the current path (root first) into `buf` and returns its length: to the goal
-    /// once it is in the tree, else to the tree node nearest the goal; just the root when no
-    /// goal is set.
-    pub fn path(&self, buf: &mut [Point]) -> Result<usize, TreeError> {
+    /// Writes the tree's current path (root first) into `buf` and returns what it is: to the
+    /// goal once it is in the tree, else to the tree node nearest the goal; just the root when
+    /// no goal is set. The path is the tree's, not a promise: it may cross a dynamic obstacle
+    /// (`blocked`) and, before the goal joins, it ends short of the goal (`to_goal` false).
+    /// Only [`Progress::waypoint`] is checked against the agent's position.
+    pub fn path(&self, buf: &mut [Point]) -> Result<PathInfo, TreeError> {
         let clock = crate::clock::FakeClock::new(1);
         let meter = Meter::new(&clock);
         let end = self
             .path_end(&meter)
             .or(self.fwd.tree.root())
             .ok_or(TreeError::UnknownNode)?;
-        self.fwd.tree.path_points(end, buf)
+        let len = self.fwd.tree.path_points(end, buf)?;
+        Ok(PathInfo {
+            len,
+            to_goal: self.goal_node() == Some(end),
+            blocked: self.fwd.tree.cost(end).is_some_and(|c| c.blocked),
+        })
     }
 
-    /// One planning step of `t_exp` (module docs) for an agent at `agent`: [`Planner::grow`],
-    /// then the root follows the agent along the path. Errors (doing nothing) when `agent` is
-    /// not finite or outside the map.
+    /// One planning step for an agent at `agent`: [`Planner::grow`], then the root follows the
+    /// agent along the path.
+    ///
+    /// # The waypoint rule
+    ///
+    /// The waypoint returned is reachable from `agent` over a segment free of the map and of
+    /// every dynamic obstacle present when `plan` returns. When the agent is off the root and
+    /// cannot reach it (an obstacle dropped between them, or an agent that is not where the
+    /// tree thinks), the tree is first re-rooted at the agent: a node at the agent's position
+    /// joins the tree below the cheapest node within `e_max` that it sees past the map (the new
+    /// edge flagged blocked if a circle crosses it), and becomes the root; if no node is in
+    /// sight the forward tree restarts at the agent. When no waypoint qualifies, the waypoint
+    /// is the agent's own position and [`Progress::status`] says why; the tree survives and
+    /// the agent goes on once the way is free.
+    ///
+    /// # Bounded work
+    ///
+    /// A call stops expanding when `t_exp` has passed on `clock`, after
+    /// `max_expansions_per_call` expansions, or once `max_work_per_call` work units are done,
+    /// whichever comes first; every rewiring phase stops at the same limits. So whatever the
+    /// clock (even one that never advances) a call does at most
+    /// `max_work_per_call + W_step` units, where `W_step`, the most one expansion step can
+    /// add after the last check, is `O(N)`: a metric nearest scan (N metric evaluations), a
+    /// meet test over the other tree (N visits), a graft (N inserts) or a re-rooting (N).
+    /// One unit is about 12 ns on the development machine.
+    ///
+    /// Errors (doing nothing) when `agent` is not finite, outside the map or inside the
+    /// static map's obstacles; an agent inside a dynamic obstacle is not an error (it holds).
     pub fn plan<C: Clock + ?Sized>(
         &mut self,
         clock: &C,
@@ -313,18 +418,26 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.grid().contains(agent) {
             return Err(InputError::OutOfBounds);
         }
-        let meter = Meter::new(clock);
+        if !self.map.grid().point_free(agent) {
+            return Err(InputError::InObstacle);
+        }
+        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64);
+        let trapped = self.map.obstacles().contains(agent);
+        if !trapped {
+            self.anchor(agent, &meter);
+        }
         let expansions = self.expand_for(&meter, clock);
-        let advanced = self.follow(agent, &meter);
-        Ok(self.progress(expansions, advanced))
+        let advanced = !trapped && self.follow(agent, &meter);
+        Ok(self.progress(Some(agent), expansions, advanced, &meter))
     }
 
     /// Expansion and rewiring for `t_exp` without moving the root: planning while the agent
-    /// stands still.
+    /// stands still (bounded as [`Planner::plan`]). The waypoint is the root, unchecked: no
+    /// agent position is given.
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
-        let meter = Meter::new(clock);
+        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64);
         let expansions = self.expand_for(&meter, clock);
-        self.progress(expansions, false)
+        self.progress(None, expansions, false, &meter)
     }
 
     fn expand_for<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) -> u32 {
@@ -338,17 +451,125 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         expansions
     }
 
-    fn progress(&self, expansions: u32, advanced: bool) -> Progress {
+    /// The call's report. With an agent position, the waypoint rule is enforced here, last.
+    fn progress<C: Clock + ?Sized>(
+        &self,
+        agent: Option<Point>,
+        expansions: u32,
+        advanced: bool,
+        meter: &Meter<'_, C>,
+    ) -> Progress {
         let goal_node = self.goal_node();
+        let goal_cost = goal_node.and_then(|g| self.fwd.tree.cost(g));
+        let root = self.root_position();
+        let at = agent.unwrap_or(root);
+        let arrived = goal_node.is_some() && self.goal.is_some_and(|g| g.pos == at);
+        let waypoint = match agent {
+            Some(a) if arrived || (a != root && !self.map.free_path(a, root)) => a,
+            _ => root,
+        };
+        let status = match self.goal {
+            None => Status::NoGoal,
+            Some(_) if agent.is_some() && self.map.obstacles().contains(at) => {
+                Status::Waiting(Wait::AgentInObstacle)
+            }
+            Some(_) if arrived => Status::Arrived,
+            Some(_) if agent.is_some_and(|a| a != root && waypoint == a) => {
+                Status::Waiting(Wait::AgentBlocked)
+            }
+            Some(g) if !self.metric.distance(at, g.pos).is_finite() => Status::Unreachable,
+            Some(_) if goal_node.is_none() => Status::Searching,
+            Some(_) if goal_cost.is_some_and(|c| c.blocked) => Status::Waiting(Wait::PathBlocked),
+            Some(_) => Status::Following,
+        };
         Progress {
-            waypoint: self.root_position(),
+            waypoint,
+            status,
+            work: meter.work(),
             goal_in_tree: goal_node.is_some(),
-            goal_cost: goal_node.and_then(|g| self.fwd.tree.cost(g)),
+            goal_cost,
             nodes: self.fwd.tree.len(),
             reverse_nodes: self.rev.tree.len(),
             expansions,
             advanced,
             tree_full: self.full,
+        }
+    }
+
+    /// Makes sure the agent can reach the root: when a straight free segment does not join
+    /// them, the agent's position becomes the root (see [`Planner::plan`]).
+    fn anchor<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) {
+        let root = self.root_position();
+        meter.charge(12);
+        if agent == root || self.map.free_path(agent, root) {
+            return;
+        }
+        let env = Env {
+            map: &self.map,
+            metric: &self.metric,
+            cfg: &self.cfg,
+        };
+        // The agent stands on a node: that node becomes the root.
+        if let Some((q, d2)) = self.fwd.index.nearest(agent, self.fwd.tree.positions())
+            && d2 < env.duplicate_sq()
+            && self.fwd.tree.set_root(q).is_ok()
+        {
+            meter.charge(N as u32 / 8);
+            self.stats.reanchored += 1;
+            self.fwd.restart_sweeps();
+            return;
+        }
+        // Candidates: nodes within e_max, cheapest first, joined to the agent past the map.
+        let mut near = Near::new();
+        self.fwd.nearby(agent, self.cfg.e_max, &mut near, meter);
+        near.sort_unstable_by_key(|&id| {
+            self.fwd
+                .cost(id)
+                .extend(self.fwd.pos(id).dist(agent), false)
+        });
+        let grid = self.map.grid();
+        let parent = near.iter().copied().find(|&id| {
+            meter.charge(4);
+            grid.segment_free(self.fwd.pos(id), agent)
+        });
+        let anchored = parent.is_some_and(|parent| {
+            let blocked = self
+                .map
+                .obstacles()
+                .blocks_segment(self.fwd.pos(parent), agent);
+            let mut keep = [parent, self.goal_node().unwrap_or(parent)];
+            if self.fwd.tree.is_full() {
+                self.full = true;
+                if !self.fwd.recycle(&mut self.rng, agent, &mut keep, meter) {
+                    return false;
+                }
+                self.rename_goal(keep[1]);
+            }
+            let Ok(id) = self.fwd.insert(agent, keep[0], blocked) else {
+                return false;
+            };
+            meter.charge(N as u32 / 8);
+            self.fwd.tree.set_root(id).is_ok()
+        });
+        if anchored {
+            self.stats.reanchored += 1;
+            self.fwd.restart_sweeps();
+        } else {
+            // No node reaches the agent (or no room): the tree cannot serve it; start over here.
+            self.stats.restarted += 1;
+            self.fwd.reset(agent);
+            if let Some(goal) = self.goal {
+                self.begin_search(goal.pos);
+            }
+        }
+    }
+
+    /// After recycling in the forward tree: the goal node's id may have moved.
+    fn rename_goal(&mut self, renamed: NodeId) {
+        if let Some(g) = self.goal.as_mut()
+            && g.node.is_some()
+        {
+            g.node = Some(renamed);
         }
     }
 
@@ -537,8 +758,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
-    /// Grafts the reverse tree's trunk from `b` to its root (the goal) below forward node `a`.
-    /// Refused (returns false, changing nothing) when the forward arena lacks room.
+    /// Grafts the reverse tree's trunk from `b` to its root (the goal) below forward node `a`,
+    /// recycling forward leaves when the arena lacks room. Refused (returns false) when the
+    /// trunk cannot fit.
     fn graft<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {
         let rev = &self.rev.tree;
         let mut depth = 0usize;
@@ -550,12 +772,25 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
             v = rev.parent(x);
         }
-        if self.fwd.tree.len() + depth > N {
+        let mut parent = a;
+        let need = (self.fwd.tree.len() + depth).saturating_sub(N);
+        if need > 0 {
+            // Make room: recycle forward leaves (never `a` or its ancestors, which have
+            // children). Refused when the trunk alone would not fit.
             self.full = true;
-            return false;
+            let goal = self.goal.map_or(self.rev.pos(b), |g| g.pos);
+            if depth >= N {
+                return false;
+            }
+            let mut keep = [parent];
+            for _ in 0..need {
+                if !self.fwd.recycle(&mut self.rng, goal, &mut keep, meter) {
+                    return false;
+                }
+            }
+            parent = keep[0];
         }
         meter.charge(4 * depth as u32);
-        let mut parent = a;
         let mut blocked = false; // the meeting segment was tested free
         let mut v = Some(b);
         while let Some(x) = v {

@@ -35,6 +35,10 @@ pub const NEAR_CAP: usize = 64;
 /// The neighbour list type.
 pub(crate) type Near = heapless::Vec<NodeId, NEAR_CAP>;
 
+/// Two states closer than this fraction of a grid cell are the same state: a new sample there
+/// is dropped, and a goal there joins as that node.
+pub(crate) const DUPLICATE: f32 = 1e-4;
+
 /// Storage of one tree: the arena of `N` nodes, a spatial index of up to `B` buckets and the
 /// resumable state of its rewiring sweeps. Two of these (forward and reverse tree) make a
 /// [`crate::planner::Storage`].
@@ -159,6 +163,12 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
         let cells = (libm::fabsf(a.x - b.x) + libm::fabsf(a.y - b.y)) * inv;
         meter.charge(2 + cells as u32);
         self.map.free_path(a, b)
+    }
+
+    /// Squared distance under which two states are the same ([`DUPLICATE`] of a cell).
+    pub fn duplicate_sq(&self) -> f32 {
+        let d = DUPLICATE * self.map.grid().cell_size();
+        d * d
     }
 
     /// `d_A`, charged (2 units plus what the metric reports).
@@ -317,44 +327,105 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         target: Option<&mut Target>,
         meter: &Meter<'_, C>,
     ) -> Grown {
-        let cfg = env.cfg;
+        let mut target = target;
         let mut grown = Grown::default();
+        let added = self.add_sample(env, rng, target.as_deref_mut(), meter, &mut grown.full);
+        grown.added = added.map(|(id, _)| id);
+        let Some(t) = target else {
+            return grown;
+        };
+        if t.node.is_some() {
+            return grown;
+        }
+        let joined = match added {
+            Some((id, true)) => Some(id),
+            // A new node near the goal, or no new node at all (the sample was a duplicate or
+            // the neighbourhood was dense): try to connect the goal to the tree directly, so
+            // neither the duplicate test nor the density rule can keep it out.
+            Some((id, false)) if self.pos(id).dist(t.pos) > env.cfg.e_max => None,
+            _ => self.join(env, rng, t, meter, &mut grown.full),
+        };
+        if let Some(g) = joined {
+            t.node = Some(g);
+            grown.goal_joined = true;
+        }
+        grown
+    }
+
+    /// Connects `goal` to the tree: the node already standing on it, or a new node below the
+    /// cheapest node within `e_max` that sees it over a free segment (making room in a full
+    /// arena). `None` when no node qualifies.
+    fn join<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        rng: &mut R,
+        target: &mut Target,
+        meter: &Meter<'_, C>,
+        full: &mut bool,
+    ) -> Option<NodeId> {
+        let goal = target.pos;
+        meter.charge(8);
+        let (q, d2) = self.index.nearest(goal, self.tree.positions())?;
+        if d2 < env.duplicate_sq() {
+            return Some(q);
+        }
+        let e_max = env.cfg.e_max;
+        if d2 > e_max * e_max {
+            return None;
+        }
+        let mut near = Near::new();
+        self.nearby(goal, e_max, &mut near, meter);
+        if !near.contains(&q) {
+            if near.is_full() {
+                near.pop();
+            }
+            let _ = near.push(q);
+        }
+        let parent = self.best_parent(env, goal, &mut near, meter)?;
+        self.insert_making_room(rng, goal, parent, Some(target), meter, full)
+    }
+
+    /// Sample, nearest, steer and add (module docs): the new node, and whether it stands on
+    /// the goal.
+    fn add_sample<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        rng: &mut R,
+        target: Option<&mut Target>,
+        meter: &Meter<'_, C>,
+        full: &mut bool,
+    ) -> Option<(NodeId, bool)> {
+        let cfg = env.cfg;
         let view = target.as_deref().map(|t| self.goal_view(env, t, meter));
-        let Some(x_rand) = sample_state(
+        let x_rand = sample_state(
             rng,
             env.map,
             view.as_ref(),
             cfg.p_goal,
             cfg.p_uniform,
             cfg.sample_attempts,
-        ) else {
-            return grown;
-        };
+        )?;
         meter.charge(4);
-        let Some(x_nearest) = self.nearest(env, x_rand, meter) else {
-            return grown;
-        };
-        let Some(x_new) = self.steer(env, rng, x_nearest, x_rand, meter) else {
-            return grown;
-        };
-        // Not already in the tree.
+        let x_nearest = self.nearest(env, x_rand, meter)?;
+        let x_new = self.steer(env, rng, x_nearest, x_rand, meter)?;
+        let is_goal = target
+            .as_deref()
+            .is_some_and(|t| t.node.is_none() && t.pos == x_new);
+        // Not already in the tree (the goal is then joined to that node by `join`).
         if let Some((_, d2)) = self.index.nearest(x_new, self.tree.positions())
-            && d2 < 1e-8
+            && d2 < env.duplicate_sq()
         {
-            return grown;
+            return None;
         }
         let radius = env.radius(self.tree.len());
         let mut near = Near::new();
         let found = self.nearby(x_new, radius, &mut near, meter);
-        let is_goal = target
-            .as_deref()
-            .is_some_and(|t| t.node.is_none() && t.pos == x_new);
         let far_sample = self.pos(x_nearest).dist(x_rand) > cfg.e_max;
         if !(found < cfg.n_max as usize || far_sample || is_goal) {
             if cfg.base == Base::RtRrt {
                 let _ = self.goal_queue.push_back(x_nearest);
             }
-            return grown;
+            return None;
         }
         if !near.contains(&x_nearest) {
             // Keep x_nearest a candidate even when the list was truncated.
@@ -363,37 +434,130 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
             let _ = near.push(x_nearest);
         }
-        let Some(parent) = self.best_parent(env, x_new, &mut near, meter) else {
-            return grown;
-        };
-        let id = match self.insert(x_new, parent, false) {
-            Ok(id) => id,
-            Err(_) => {
-                grown.full = true;
-                return grown;
-            }
-        };
-        grown.added = Some(id);
+        let parent = self.best_parent(env, x_new, &mut near, meter)?;
+        let id = self.insert_making_room(rng, x_new, parent, target, meter, full)?;
         if cfg.base == Base::RtRrt {
             let _ = self.goal_queue.push_back(id);
         }
-        if let Some(t) = target
-            && t.node.is_none()
-        {
-            if is_goal {
-                t.node = Some(id);
-                grown.goal_joined = true;
-            } else if x_new.dist(t.pos) <= cfg.e_max && env.free(x_new, t.pos, meter) {
-                match self.insert(t.pos, id, false) {
-                    Ok(g) => {
-                        t.node = Some(g);
-                        grown.goal_joined = true;
-                    }
-                    Err(_) => grown.full = true,
+        Some((id, is_goal))
+    }
+
+    /// Inserts a node below `parent` (its edge free). When the arena is full, one leaf is
+    /// recycled first ([`TreeStore::recycle`]) if the tree has a `target` that still needs
+    /// room: one not joined yet (promise: a goal that can be reached joins) or joined over a
+    /// path that crosses a dynamic obstacle (the tree must grow a way around). Once a free
+    /// path exists, a full tree rewires what it has. Sets `full` when the arena was full.
+    pub(crate) fn insert_making_room<R: Rng + ?Sized, C: Clock + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        pos: Point,
+        parent: NodeId,
+        target: Option<&mut Target>,
+        meter: &Meter<'_, C>,
+        full: &mut bool,
+    ) -> Option<NodeId> {
+        if !self.tree.is_full() {
+            return self.insert(pos, parent, false).ok();
+        }
+        *full = true;
+        let t = target?;
+        let needs_room = t.node.is_none_or(|g| self.cost(g).blocked);
+        if !needs_room {
+            return None;
+        }
+        let mut keep = [parent, t.node.unwrap_or(parent)];
+        if !self.recycle(rng, t.pos, &mut keep, meter) {
+            return None;
+        }
+        if t.node.is_some() {
+            t.node = Some(keep[1]);
+        }
+        self.insert(pos, keep[0], false).ok()
+    }
+
+    /// Frees one slot of the arena by removing the leaf least likely to lie on a path to
+    /// `toward`: among a few random nodes, the leaf (not the root, not in `keep`) with the
+    /// highest `Cost(x) + d_E(x, toward)`, a lower bound of the best path through it; a
+    /// bounded scan when no drawn node is a usable leaf. Ids in `keep` and in the rewiring
+    /// sweeps are renamed when the arena's last node moves into the freed slot. Returns whether
+    /// a node was removed.
+    pub(crate) fn recycle<R: Rng + ?Sized, C: Clock + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        toward: Point,
+        keep: &mut [NodeId],
+        meter: &Meter<'_, C>,
+    ) -> bool {
+        const DRAWS: usize = 16;
+        let len = self.tree.len();
+        if len < 2 {
+            return false;
+        }
+        let usable = |s: &Self, id: NodeId| {
+            s.tree.is_leaf(id) && s.tree.root() != Some(id) && !keep.contains(&id)
+        };
+        // Blocked paths first (Cost orders them last, so they score highest).
+        let score = |s: &Self, id: NodeId| s.cost(id).extend(s.pos(id).dist(toward), false);
+        let mut best: Option<(Cost, NodeId)> = None;
+        for _ in 0..DRAWS {
+            let id = NodeId((rng.next_u32() % len as u32) as u16);
+            if usable(self, id) {
+                let sc = score(self, id);
+                if best.is_none_or(|(b, _)| sc > b) {
+                    best = Some((sc, id));
                 }
             }
         }
-        grown
+        let mut scanned = 0;
+        if best.is_none() {
+            let from = rng.next_u32() as usize % len;
+            best = (0..len)
+                .map(|i| NodeId(((from + i) % len) as u16))
+                .inspect(|_| scanned += 1)
+                .find(|&id| usable(self, id))
+                .map(|id| (score(self, id), id));
+        }
+        meter.charge((DRAWS + scanned) as u32 + 8);
+        let Some((_, victim)) = best else {
+            return false;
+        };
+        let _ = self.index.remove(victim);
+        match self.tree.remove_leaf(victim) {
+            Ok(moved) => {
+                if let Some((old, new)) = moved {
+                    let _ = self.index.remove(old);
+                    let _ = self.index.insert(new, self.pos(new));
+                    for k in keep.iter_mut().filter(|k| **k == old) {
+                        *k = new;
+                    }
+                }
+                self.rename_in_sweeps(moved);
+                true
+            }
+            Err(_) => {
+                let _ = self.index.insert(victim, self.pos(victim));
+                false
+            }
+        }
+    }
+
+    /// After a removal: ids in the sweeps' queues and stack that moved are renamed, and ids
+    /// that no longer exist are replaced by the root (a harmless extra visit).
+    fn rename_in_sweeps(&mut self, moved: Option<(NodeId, NodeId)>) {
+        let len = self.tree.len();
+        let root = self.tree.root().unwrap_or(NodeId(0));
+        let fix = |id: &mut NodeId| {
+            if let Some((old, new)) = moved
+                && *id == old
+            {
+                *id = new;
+            } else if id.index() >= len {
+                *id = root;
+            }
+        };
+        self.root_queue.iter_mut().for_each(fix);
+        self.goal_queue.iter_mut().for_each(fix);
+        self.goal_stack.iter_mut().for_each(fix);
     }
 
     /// The candidate giving `x` the lowest cost over a free segment: candidates are ordered by

@@ -166,6 +166,11 @@ impl<const N: usize> Tree<N> {
         self.len as usize >= N
     }
 
+    /// Whether `id` is a node without children.
+    pub fn is_leaf(&self, id: NodeId) -> bool {
+        self.contains(id) && self.first_child.get(id.index()) == Some(&NONE)
+    }
+
     /// Whether `id` names a node of this tree.
     #[inline]
     pub const fn contains(&self, id: NodeId) -> bool {
@@ -291,14 +296,15 @@ impl<const N: usize> Tree<N> {
     }
 
     /// `UpdateEdge`: makes `parent` the parent of `child` with an edge whose blocked flag is
-    /// `edge_blocked`, and updates the cached costs of the whole moved subtree.
+    /// `edge_blocked`, and updates the cached costs of the whole moved subtree. Returns the
+    /// size of the moved subtree (the work done).
     /// `Err(WouldCycle)` when `parent` lies in `child`'s subtree (which includes `child == root`).
     pub fn set_parent(
         &mut self,
         child: NodeId,
         parent: NodeId,
         edge_blocked: bool,
-    ) -> Result<(), TreeError> {
+    ) -> Result<usize, TreeError> {
         if !self.contains(child) || !self.contains(parent) {
             return Err(TreeError::UnknownNode);
         }
@@ -309,8 +315,7 @@ impl<const N: usize> Tree<N> {
         self.unlink(c);
         self.link(c, parent.0);
         self.set_flag(c, EDGE_BLOCKED, edge_blocked);
-        self.refresh_subtree(c);
-        Ok(())
+        Ok(self.refresh_subtree(c))
     }
 
     /// Sets the blocked flag of the edge from `child`'s parent and updates the subtree's costs.
@@ -368,6 +373,59 @@ impl<const N: usize> Tree<N> {
         self.root = new_root.0;
         self.refresh_subtree(self.root);
         Ok(())
+    }
+
+    /// Removes a leaf (a node without children, not the root) and frees its slot: O(1) plus
+    /// the moved node's children. Ids stay dense, so the last node moves into the freed slot:
+    /// the result is `Some((old, new))` when a node changed id that way (every id held
+    /// elsewhere must be renamed), `None` when the removed node was the last one.
+    pub fn remove_leaf(&mut self, id: NodeId) -> Result<Option<(NodeId, NodeId)>, TreeError> {
+        if !self.contains(id) {
+            return Err(TreeError::UnknownNode);
+        }
+        if id.0 == self.root || self.first_child.get(id.index()) != Some(&NONE) {
+            return Err(TreeError::NotALeaf);
+        }
+        self.unlink(id.0);
+        let last = self.len - 1;
+        self.len = last;
+        if id.0 == last {
+            return Ok(None);
+        }
+        // Move `last` into `id`'s slot and point every link at it.
+        let (from, to) = (last as usize, id.index());
+        self.pos[to] = self.pos[from];
+        self.cost[to] = self.cost[from];
+        self.flags[to] = self.flags[from];
+        let (parent, prev, next) = (
+            self.parent[from],
+            self.prev_sibling[from],
+            self.next_sibling[from],
+        );
+        self.parent[to] = parent;
+        self.prev_sibling[to] = prev;
+        self.next_sibling[to] = next;
+        self.first_child[to] = self.first_child[from];
+        if prev != NONE {
+            self.next_sibling[prev as usize] = id.0;
+        } else if parent != NONE {
+            self.first_child[parent as usize] = id.0;
+        }
+        if next != NONE {
+            self.prev_sibling[next as usize] = id.0;
+        }
+        let mut c = self.first_child[to];
+        for _ in 0..self.len {
+            if c == NONE {
+                break;
+            }
+            self.parent[c as usize] = id.0;
+            c = self.next_sibling[c as usize];
+        }
+        if self.root == last {
+            self.root = id.0;
+        }
+        Ok(Some((NodeId(last), id)))
     }
 
     /// Writes the path from the root to `to` (both included, root first) into `buf` and returns
@@ -552,16 +610,17 @@ impl<const N: usize> Tree<N> {
     }
 
     /// Recomputes the costs of `top`'s whole subtree in preorder (parents before children),
-    /// walking the intrusive links: no stack, O(subtree size).
-    fn refresh_subtree(&mut self, top: u16) {
+    /// walking the intrusive links: no stack, O(subtree size). Returns the subtree's size.
+    fn refresh_subtree(&mut self, top: u16) -> usize {
         let mut v = top;
-        for _ in 0..self.len {
+        for done in 1..=self.len as usize {
             self.refresh_cost(v);
             match self.next_preorder(v, top) {
                 Some(next) => v = next,
-                None => return,
+                None => return done,
             }
         }
+        self.len as usize
     }
 
     /// The node after `v` in a preorder walk of `top`'s subtree.

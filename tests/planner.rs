@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use bi_am_rrt::builtin::{self, Scenario};
 use bi_am_rrt::clock::FakeClock;
-use bi_am_rrt::error::InputError;
+use bi_am_rrt::error::{InputError, SetupError};
 use bi_am_rrt::map::Circle;
 use bi_am_rrt::metric::DiffusionTable;
 use bi_am_rrt::{Config, Euclidean, Map, Metric, MetricKind, Planner, Point, Storage};
@@ -143,7 +143,7 @@ fn meet_and_graft_make_one_tree_with_the_goal() {
         let g = p.goal_node().unwrap();
         assert_eq!(p.tree().position(g), Some(s.goals[0]));
         let mut path = vec![Point::ZERO; N];
-        let n = p.path(&mut path).unwrap();
+        let n = p.path(&mut path).unwrap().len;
         assert_eq!(path[0], p.root_position());
         assert_eq!(path[n - 1], s.goals[0]);
         for w in path[..n].windows(2) {
@@ -187,7 +187,7 @@ fn an_obstacle_dropped_on_the_path_is_avoided() {
                 }
                 // Drop a disc on the path, about 8 m ahead of the agent.
                 let mut path = vec![Point::ZERO; N];
-                let n = p.path(&mut path).unwrap();
+                let n = p.path(&mut path).unwrap().len;
                 let mut ahead = 0.0;
                 for w in path[..n].windows(2) {
                     ahead += w[0].dist(w[1]);
@@ -273,15 +273,15 @@ fn bad_input_is_an_error_not_a_panic() {
     };
     assert_eq!(
         new(&mut storage, Point::new(f32::NAN, 1.0)),
-        Some(InputError::NotFinite)
+        Some(SetupError::Start(InputError::NotFinite))
     );
     assert_eq!(
         new(&mut storage, Point::new(-1.0, 1.0)),
-        Some(InputError::OutOfBounds)
+        Some(SetupError::Start(InputError::OutOfBounds))
     );
     assert_eq!(
         new(&mut storage, Point::new(12.0, 12.0)),
-        Some(InputError::InObstacle)
+        Some(SetupError::Start(InputError::InObstacle))
     );
     let mut p = planner_on(&mut storage, s, Euclidean, cfg, 1);
     assert_eq!(
@@ -388,7 +388,7 @@ fn an_unreachable_goal_is_refused_or_never_found() {
     assert!(last.tree_full || last.nodes > 100);
     p.tree().validate().unwrap();
     let mut path = [Point::ZERO; 512];
-    assert!(p.path(&mut path).unwrap() >= 1);
+    assert!(p.path(&mut path).unwrap().len >= 1);
 }
 
 #[test]
@@ -403,9 +403,60 @@ fn a_frozen_clock_still_returns() {
     let frozen = FakeClock::nanos();
     for _ in 0..5 {
         let pr = p.plan(&frozen, s.start).unwrap();
-        assert_eq!(pr.expansions, 300);
+        eprintln!(
+            "faithful, frozen: {} expansions, {} units",
+            pr.expansions, pr.work
+        );
+        assert!((1..=300).contains(&pr.expansions), "{pr:?}");
+        assert!(
+            pr.work <= cfg.max_work_per_call as u64 + step_bound(N),
+            "{pr:?}"
+        );
     }
     assert_eq!(frozen.peek(), 0);
+}
+
+/// The most one expansion step may add after the call's last check (`Planner::plan` docs):
+/// O(N) with a generous constant.
+fn step_bound(n: usize) -> u64 {
+    64 * n as u64 + 100_000
+}
+
+/// Issue 7, case 6: with a clock that never advances one call took 0.9-1.5 s of CPU (N = 8192,
+/// default mode) and over 120 s in `RewireMode::Faithful`: only the 20,000-expansion cap
+/// ended it. The work cap now bounds every call, in both modes, with any metric.
+#[test]
+fn regression_frozen_clock_call_is_bounded_by_work() {
+    let s = &builtin::MAZE;
+    let table = landmark_table(&s.grid, 8);
+    for mode in [
+        bi_am_rrt::RewireMode::PerExpansion { visits: 24 },
+        bi_am_rrt::RewireMode::Faithful,
+    ] {
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let mut cfg = Config::bi_am_rrt(MetricKind::Diffusion).with_rewire_mode(mode);
+        cfg.max_work_per_call = 2_000_000;
+        let metric = DiffusionTable::new(&table).unwrap();
+        let mut p = planner_on(&mut storage, s, metric, cfg, 5);
+        p.set_goal(s.goals[0]).unwrap();
+        let frozen = FakeClock::nanos();
+        for _ in 0..4 {
+            let pr = p.plan(&frozen, s.start).unwrap();
+            eprintln!(
+                "{mode:?}, frozen: {} expansions, {} units",
+                pr.expansions, pr.work
+            );
+            assert!(pr.expansions < cfg.max_expansions_per_call, "{pr:?}");
+            assert!(
+                pr.work >= cfg.max_work_per_call as u64,
+                "the cap ended the call"
+            );
+            assert!(
+                pr.work <= cfg.max_work_per_call as u64 + step_bound(N),
+                "{pr:?}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -523,7 +523,7 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
         cell_size: graph.cell * c as f32,
         scale,
     };
-    let mut out = vec![0u8; TABLE_HEADER_LEN + header.payload_len()];
+    let mut out = vec![0u8; header.table_len().context("table too large")?];
     let written = write_table(&header, &mut out, |tc, tr, coords| {
         let node = representative(graph, tc as u32, tr as u32, c);
         match node {

@@ -42,7 +42,7 @@ fn picture(p: &SimPlanner<'_, '_>, trail: &[Point], scenario: &Scenario) -> Canv
         c.circle(&circle);
     }
     let mut path = vec![Point::ZERO; p.tree().len().max(1)];
-    if let Ok(n) = p.path(&mut path) {
+    if let Ok(bi_am_rrt::PathInfo { len: n, .. }) = p.path(&mut path) {
         c.polyline(&path[..n], draw::PATH);
     }
     c.polyline(trail, draw::TRAIL);
@@ -85,7 +85,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             {
                 // A disc on the path about 10 m ahead of the agent.
                 let mut path = vec![Point::ZERO; p.tree().len()];
-                if let Ok(n) = p.path(&mut path) {
+                if let Ok(bi_am_rrt::PathInfo { len: n, .. }) = p.path(&mut path) {
                     let mut ahead = 0.0;
                     for w in path[..n].windows(2) {
                         ahead += w[0].dist(w[1]);

@@ -138,7 +138,7 @@ pub fn landmark_table(g: &OccupancyGrid<'_>, k: usize) -> Vec<u8> {
         cell_size: g.cell_size(),
         scale: 0.01,
     };
-    let mut out = vec![0u8; 32 + header.payload_len()];
+    let mut out = vec![0u8; header.table_len().unwrap()];
     let cols = g.cols() as usize;
     write_table(&header, &mut out, |c, r, coords| {
         let i = r as usize * cols + c as usize;
@@ -212,7 +212,7 @@ pub fn path_meets<M: Metric, R: Rng, const N: usize, const B: usize, const K: us
     c: &Circle,
 ) -> bool {
     let mut buf = vec![Point::ZERO; N];
-    let n = planner.path(&mut buf).unwrap();
+    let n = planner.path(&mut buf).unwrap().len;
     buf[..n]
         .windows(2)
         .any(|w| c.intersects_segment(w[0], w[1]))
