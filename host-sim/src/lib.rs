@@ -3,16 +3,24 @@
 //! metric data, drives agents with the core's protocol, runs the paper's 20-planner matrix in
 //! parallel, and writes CSV, JSON and pictures.
 //!
+//! Without the default feature `sim` only the loaders, the grid graph, the metrics, the clocks
+//! and the drawing are built (no `faer`): what the fuzz targets need.
+//!
 //! The core never knows this crate exists: everything here goes through the core's public API
 //! (`Planner`, `Metric`, `Clock`, `DiffusionTable`, ...).
 
+#[cfg(feature = "sim")]
 pub mod bake;
 pub mod clock;
+#[cfg(feature = "sim")]
 pub mod diffusion;
 pub mod draw;
+#[cfg(feature = "sim")]
 pub mod experiment;
 pub mod graph;
 pub mod maps;
 pub mod metrics;
+#[cfg(feature = "sim")]
 pub mod run;
+#[cfg(feature = "sim")]
 pub mod sim;

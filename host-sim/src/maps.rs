@@ -73,17 +73,54 @@ pub fn pil_grey(r: u8, g: u8, b: u8) -> u8 {
     ((19595 * r as u32 + 38470 * g as u32 + 7471 * b as u32 + 0x8000) >> 16) as u8
 }
 
-/// Reads a PNG map with the mean-threshold rule (module docs), 1 m per pixel.
+/// The most cells a map may have (4096 x 4096): larger images are refused before they are
+/// decoded, so a wrong file costs neither gigabytes nor minutes.
+pub const MAX_MAP_CELLS: u64 = 4096 * 4096;
+
+/// Reads a PNG map file with the mean-threshold rule (module docs); see [`decode_png`].
 pub fn load_png(path: &Path) -> Result<OwnedGrid> {
-    let img = image::open(path)
-        .with_context(|| format!("reading map {}", path.display()))?
-        .to_rgb8();
-    let (w, h) = img.dimensions();
-    if w == 0 || h == 0 || w > u16::MAX as u32 || h > u16::MAX as u32 {
-        bail!("map {} has unusable size {w} x {h}", path.display());
+    let bytes = std::fs::read(path).with_context(|| format!("reading map {}", path.display()))?;
+    decode_png(&bytes, &path.display().to_string())
+}
+
+/// Decodes a PNG map (named `name` in errors) with the mean-threshold rule (module docs), 1 m
+/// per pixel. Refused: images over [`MAX_MAP_CELLS`] (checked from the header, before
+/// decoding) and images of one dark grey level, which the rule would read as all free (a
+/// uniform light image is an empty map).
+pub fn decode_png(bytes: &[u8], name: &str) -> Result<OwnedGrid> {
+    let reader =
+        || image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png);
+    let (w, h) = reader()
+        .into_dimensions()
+        .with_context(|| format!("reading the size of map {name}"))?;
+    if w == 0 || h == 0 {
+        bail!("map {name} is empty ({w} x {h} pixels)");
     }
+    if w as u64 * h as u64 > MAX_MAP_CELLS || w > u16::MAX as u32 || h > u16::MAX as u32 {
+        bail!(
+            "map {name} is {w} x {h} pixels: at most {MAX_MAP_CELLS} cells (4096 x 4096) are supported"
+        );
+    }
+    let mut reader = reader();
+    // Decoding buffers stay within the cap too (RGBA16 at most: 8 bytes a pixel).
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(w);
+    limits.max_image_height = Some(h);
+    limits.max_alloc = Some(MAX_MAP_CELLS * 8 + (1 << 20));
+    reader.limits(limits);
+    let img = reader
+        .decode()
+        .with_context(|| format!("decoding map {name}"))?
+        .to_rgb8();
     let grey: Vec<u8> = img.pixels().map(|p| pil_grey(p[0], p[1], p[2])).collect();
     let mean = grey.iter().map(|&v| v as f64).sum::<f64>() / grey.len() as f64;
+    if grey.iter().all(|&v| v == grey[0]) && grey[0] < 128 {
+        bail!(
+            "map {name} is a single dark grey level ({}): the mean-threshold rule would read it \
+             as all free; draw free space light and obstacles dark",
+            grey[0]
+        );
+    }
     OwnedGrid::from_fn(w as u16, h as u16, 1.0, |c, r| {
         (grey[r as usize * w as usize + c as usize] as f64) < mean
     })
@@ -107,6 +144,7 @@ pub struct Scenario {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct Entry {
     file: PathBuf,
     #[serde(default)]
@@ -126,13 +164,27 @@ fn default_sigma() -> f32 {
 pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenario>> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let table: toml::Table =
-        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
+    let mut scenarios = scenarios_from_str(&text, |file| load_png(&dir.join(file)), only)
+        .with_context(|| format!("in {}", path.display()))?;
+    for s in &mut scenarios {
+        s.source = dir.join(&s.source).display().to_string();
+    }
+    Ok(scenarios)
+}
+
+/// Parses scenario-file text; `load_map(file)` reads the map a scenario names. Unknown keys,
+/// missing fields and invalid scenarios ([`Scenario::validate`]) are errors.
+pub fn scenarios_from_str(
+    text: &str,
+    mut load_map: impl FnMut(&Path) -> Result<OwnedGrid>,
+    only: Option<&[String]>,
+) -> Result<Vec<Scenario>> {
+    let table: toml::Table = toml::from_str(text).context("parsing the scenario file")?;
     if let Some(names) = only {
         for n in names {
             if !table.contains_key(n) {
-                bail!("scenario {n:?} is not in {}", path.display());
+                bail!("scenario {n:?} is not in the file");
             }
         }
     }
@@ -144,8 +196,7 @@ pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenar
         let e: Entry = value
             .try_into()
             .with_context(|| format!("scenario {name}"))?;
-        let file = dir.join(&e.file);
-        let map = load_png(&file)?;
+        let map = load_map(&e.file)?;
         if let Some([w, h]) = e.size_m
             && (w != map.width as f32 || h != map.height as f32)
         {
@@ -156,16 +207,45 @@ pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenar
             );
         }
         let pt = |p: [f32; 2]| Point::new(p[0], p[1]);
-        out.push(Scenario {
+        let sc = Scenario {
             name,
             map,
-            source: file.display().to_string(),
+            source: e.file.display().to_string(),
             start: pt(e.start),
             goals: e.goals.into_iter().map(pt).collect(),
             sigma: e.sigma_m,
-        });
+        };
+        sc.validate()?;
+        out.push(sc);
     }
     Ok(out)
+}
+
+impl Scenario {
+    /// Checks what a run needs: at least one goal, `sigma` finite and not negative, the start
+    /// and every goal inside the map and free. Goals are numbered from 1, as in the output.
+    pub fn validate(&self) -> Result<()> {
+        let name = &self.name;
+        if self.goals.is_empty() {
+            bail!("scenario {name}: `goals` is empty (give at least one goal)");
+        }
+        if !(self.sigma.is_finite() && self.sigma >= 0.0) {
+            bail!(
+                "scenario {name}: sigma_m = {} (must be finite and not negative)",
+                self.sigma
+            );
+        }
+        let map: bi_am_rrt::Map<'_, 0> = bi_am_rrt::Map::new(self.map.grid());
+        let check = |what: String, p: Point| {
+            map.check_point(p)
+                .map_err(|e| anyhow::anyhow!("scenario {name}: {what} ({}, {}): {e}", p.x, p.y))
+        };
+        check("start".into(), self.start)?;
+        for (i, g) in self.goals.iter().enumerate() {
+            check(format!("goal {}", i + 1), *g)?;
+        }
+        Ok(())
+    }
 }
 
 /// The core's built-in scenarios as host scenarios.

@@ -109,6 +109,7 @@ pub fn with_planner<T>(
     seed: u64,
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
+    prep.scenario.validate()?;
     let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
     let metric = prep.metric(cfg.metric)?;
     let map = Map::new(prep.scenario.map.grid());
@@ -121,7 +122,7 @@ pub fn with_planner<T>(
         prep.config(cfg),
         prep.scenario.start,
     )
-    .map_err(|e| anyhow!("start of {}: {e}", prep.scenario.name))?;
+    .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
     f(&mut planner)
 }
 

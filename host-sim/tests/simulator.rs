@@ -186,3 +186,97 @@ fn reference_maps_bake_to_accurate_tables() {
         }
     }
 }
+
+/// A PNG whose header claims `w x h` pixels, with no pixel data (an empty IDAT).
+fn png_header_only(path: &Path, w: u32, h: u32) {
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for &b in bytes {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    }
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(w.to_be_bytes());
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 0, 0, 0, 0]); // 8-bit grey, no interlace
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(13u32.to_be_bytes());
+    png.extend(&ihdr);
+    png.extend(crc32(&ihdr).to_be_bytes());
+    for chunk in [b"IDAT", b"IEND"] {
+        png.extend(0u32.to_be_bytes());
+        png.extend(chunk);
+        png.extend(crc32(chunk).to_be_bytes());
+    }
+    std::fs::write(path, png).unwrap();
+}
+
+fn write_scenario(dir: &Path, body: &str) -> PathBuf {
+    let path = dir.join("one.toml");
+    std::fs::write(&path, body).unwrap();
+    path
+}
+
+/// Issue 7, case 9: `goals = []` panicked in `run` and `experiment`; `sigma_m = nan` or `-30`
+/// and unknown keys were accepted; an all-black PNG read as all free; a 20000 x 20000 PNG took
+/// gigabytes and minutes before any error.
+#[test]
+fn regression_bad_scenarios_and_maps_are_refused_with_a_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    write_builtin_file(dir.path());
+    let ok = "[m]\nfile = \"maze.png\"\nstart = [5.0, 5.0]\ngoals = [[55.0, 55.0]]\n";
+    assert!(maps::load_scenarios(&write_scenario(dir.path(), ok), None).is_ok());
+    let cases = [
+        ("goals = []", "goals = []", "goals"),
+        (
+            "sigma_m = nan",
+            "sigma_m = nan\ngoals = [[55.0, 55.0]]",
+            "sigma_m",
+        ),
+        (
+            "sigma_m = -30",
+            "sigma_m = -30.0\ngoals = [[55.0, 55.0]]",
+            "sigma_m",
+        ),
+        (
+            "unknown key",
+            "goal = [[55.0, 55.0]]\ngoals = [[55.0, 55.0]]",
+            "unknown field",
+        ),
+        (
+            "goal in a wall",
+            "goals = [[55.0, 55.0], [12.5, 12.5]]",
+            "goal 2",
+        ),
+        ("goal outside", "goals = [[600.0, 55.0]]", "goal 1"),
+    ];
+    for (what, goals, expect) in cases {
+        let body = format!("[m]\nfile = \"maze.png\"\nstart = [5.0, 5.0]\n{goals}\n");
+        let err = maps::load_scenarios(&write_scenario(dir.path(), &body), None).unwrap_err();
+        let msg = format!("{err:#}");
+        assert!(msg.contains(expect), "{what}: {msg}");
+    }
+    // An all-black image; a uniform white one is an empty map.
+    image::GrayImage::from_pixel(20, 20, image::Luma([0]))
+        .save(dir.path().join("black.png"))
+        .unwrap();
+    let err = maps::load_png(&dir.path().join("black.png")).unwrap_err();
+    assert!(format!("{err:#}").contains("dark"), "{err:#}");
+    image::GrayImage::from_pixel(20, 20, image::Luma([255]))
+        .save(dir.path().join("white.png"))
+        .unwrap();
+    let white = maps::load_png(&dir.path().join("white.png")).unwrap();
+    assert!(!white.grid().is_occupied(3, 3));
+    // A huge image is refused from its header (it holds no pixel data to decode).
+    png_header_only(&dir.path().join("huge.png"), 20_000, 20_000);
+    let err = maps::load_png(&dir.path().join("huge.png")).unwrap_err();
+    assert!(format!("{err:#}").contains("at most"), "{err:#}");
+}

@@ -1,0 +1,12 @@
+//! host-sim's loaders on arbitrary bytes (issue 7, fuzz target c): PNG maps and scenario
+//! files. Anything may be refused with an error; nothing may panic or run away.
+#![no_main]
+
+use host_sim::maps;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let _ = maps::decode_png(data, "fuzz");
+    if let Ok(text) = std::str::from_utf8(data) {
+        let _ = maps::scenarios_from_str(text, |_| maps::builtin_by_name("maze").map(|s| s.map), None);
+    }
+});

@@ -1,0 +1,266 @@
+//! An interpreter of arbitrary byte strings as planner operation sequences, shared by the
+//! fuzz target `ops` (`fuzz/fuzz_targets/ops.rs`) and the seeded test `tests/ops_sequences.rs`.
+//!
+//! The bytes choose a map (a built-in or a small grid drawn from the bytes), a metric
+//! (Euclidean, or a diffusion-format table with coordinates from the bytes, some cells
+//! unreachable), a configuration (any of the 20 planners, with bytes for the parameters that
+//! may be anything valid), a tiny or small arena, and then a sequence of operations: set,
+//! change or clear the goal; plan with the agent moved towards its waypoint, teleported, or
+//! placed anywhere (outside the map, NaN); grow; add circles anywhere (on the agent, between
+//! the agent and its waypoint, on the goal) and remove them; read the path; all with frozen,
+//! stepping, work-driven and jumping clocks. After every operation both trees must be valid, and
+//! after every `plan` the waypoint rule must hold: the waypoint is the agent's position or
+//! reachable from it over a segment free of the map and every circle present.
+#![allow(dead_code)]
+
+use core::time::Duration;
+
+use bi_am_rrt::builtin;
+use bi_am_rrt::clock::FakeClock;
+use bi_am_rrt::map::{ObstacleId, OccupancyGrid, pack_grid};
+use bi_am_rrt::metric::{DiffusionTable, ElementKind, TableHeader, write_table};
+use bi_am_rrt::{Circle, Config, Euclidean, Map, Metric, Planner, Point, Storage};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+/// Reads the fuzz bytes; past the end it yields zeros (so every input is a full program).
+pub struct Bytes<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Bytes<'a> {
+    pub fn new(data: &'a [u8]) -> Self {
+        Self { data, at: 0 }
+    }
+    pub fn done(&self) -> bool {
+        self.at >= self.data.len()
+    }
+    pub fn u8(&mut self) -> u8 {
+        let b = self.data.get(self.at).copied().unwrap_or(0);
+        self.at += 1;
+        b
+    }
+    pub fn u16(&mut self) -> u16 {
+        u16::from_le_bytes([self.u8(), self.u8()])
+    }
+    /// A fraction in [0, 1].
+    pub fn unit(&mut self) -> f32 {
+        self.u16() as f32 / u16::MAX as f32
+    }
+    /// A coordinate over `[-0.1, 1.1] x extent`, sometimes NaN or infinite.
+    pub fn coord(&mut self, extent: f32) -> f32 {
+        match self.u8() {
+            0 => f32::NAN,
+            1 => f32::INFINITY,
+            2 => -f32::INFINITY,
+            3 => -0.0,
+            4 => extent,
+            _ => (self.unit() * 1.2 - 0.1) * extent,
+        }
+    }
+    pub fn point(&mut self, w: f32, h: f32) -> Point {
+        Point::new(self.coord(w), self.coord(h))
+    }
+}
+
+const K: usize = 4;
+
+/// Runs the program in `data`; `Err` names the broken promise.
+pub fn run(data: &[u8]) -> Result<(), String> {
+    let mut b = Bytes::new(data);
+    let map_choice = b.u8();
+    let mut own_bits = [0u8; 64];
+    let grid = match map_choice % 4 {
+        0 => builtin::OPEN.grid,
+        1 => builtin::MAZE.grid,
+        2 => builtin::BUG_TRAP.grid,
+        _ => {
+            // A small grid from the bytes: up to 22 x 22 cells, any cell size from 1 mm to 1 km.
+            let (w, h) = (1 + (b.u8() % 22) as u16, 1 + (b.u8() % 22) as u16);
+            let cell = [0.001f32, 0.25, 1.0, 3.0, 1000.0][b.u8() as usize % 5];
+            let density = b.u8();
+            let mut seed = b.u16() as u32 | 1;
+            pack_grid(&mut own_bits, w, h, |_, _| {
+                seed ^= seed << 13;
+                seed ^= seed >> 17;
+                seed ^= seed << 5;
+                (seed & 0xff) < density as u32 / 2
+            })
+            .map_err(|e| format!("pack_grid: {e}"))?;
+            match OccupancyGrid::new(&own_bits, w, h, cell) {
+                Ok(g) => g,
+                Err(e) => return Err(format!("a valid grid refused: {e}")),
+            }
+        }
+    };
+    let mut table = vec![0u8; 0];
+    let use_table = b.u8() % 2 == 1;
+    if use_table {
+        table = table_from_bytes(&grid, &mut b);
+    }
+    let metric_table = if use_table {
+        Some(DiffusionTable::new(&table).map_err(|e| format!("written table refused: {e}"))?)
+    } else {
+        None
+    };
+    match metric_table {
+        Some(t) => run_with(grid, t, &mut b),
+        None => run_with(grid, Euclidean, &mut b),
+    }
+}
+
+/// A table over the grid whose coordinates are the cell's position plus noise from the bytes;
+/// cells whose noise byte is 0 are unreachable.
+fn table_from_bytes(grid: &OccupancyGrid<'_>, b: &mut Bytes<'_>) -> Vec<u8> {
+    let header = TableHeader {
+        kind: if b.u8().is_multiple_of(2) {
+            ElementKind::I16
+        } else {
+            ElementKind::F32
+        },
+        dims: 2,
+        cols: grid.cols(),
+        rows: grid.rows(),
+        cell_size: grid.cell_size(),
+        scale: grid.cell_size() / 16.0,
+    };
+    let noise: Vec<u8> = (0..32).map(|_| b.u8()).collect();
+    let mut out = vec![0u8; header.table_len().unwrap()];
+    let cell = grid.cell_size();
+    write_table(&header, &mut out, |c, r, coords| {
+        let n = noise[(c as usize * 7 + r as usize * 13) % noise.len()];
+        coords[0] = (c as f32 + n as f32 / 64.0) * cell;
+        coords[1] = r as f32 * cell;
+        n != 0
+    })
+    .unwrap();
+    out
+}
+
+fn run_with<M: Metric>(
+    grid: OccupancyGrid<'_>,
+    metric: M,
+    b: &mut Bytes<'_>,
+) -> Result<(), String> {
+    let configs = Config::table1();
+    let mut cfg = configs[b.u8() as usize % configs.len()];
+    let (w, h) = (grid.width_m(), grid.height_m());
+    let span = w.max(h);
+    cfg.e_max = span * (0.01 + b.unit() * 0.3);
+    cfg.sigma = span * b.unit();
+    cfg.n_max = 1 + b.u8() as u16 % 30;
+    cfg.p_goal = b.unit();
+    cfg.p_uniform = b.unit();
+    cfg.t_exp = Duration::from_micros(1 + b.u16() as u64 * 4);
+    cfg.max_work_per_call = 2_000 + b.u16() as u32 * 2;
+    cfg.max_expansions_per_call = 1 + b.u8() as u32 * 4;
+    let seed = b.u16() as u64;
+    let start = b.point(w, h);
+    match b.u8() % 3 {
+        0 => drive::<_, 64, 16>(grid, metric, cfg, seed, start, b),
+        1 => drive::<_, 8, 2>(grid, metric, cfg, seed, start, b),
+        _ => drive::<_, 2, 1>(grid, metric, cfg, seed, start, b),
+    }
+}
+
+fn drive<M: Metric, const N: usize, const B: usize>(
+    grid: OccupancyGrid<'_>,
+    metric: M,
+    cfg: Config,
+    seed: u64,
+    start: Point,
+    b: &mut Bytes<'_>,
+) -> Result<(), String> {
+    let mut storage = Box::new(Storage::<N, B>::new());
+    let map = Map::<K>::new(grid);
+    let rng = XorShiftRng::seed_from_u64(seed);
+    let Ok(mut p) = Planner::new(&mut storage, map, metric, rng, cfg, start) else {
+        return Ok(()); // refused with an error: fine
+    };
+    let (w, h) = (grid.width_m(), grid.height_m());
+    let clock = FakeClock::nanos().with_work_cost(b.u8() as u64 % 40);
+    let mut agent = start;
+    let mut waypoint = start;
+    let mut ids: Vec<ObstacleId> = Vec::new();
+    let mut path = vec![Point::ZERO; N];
+    for _ in 0..64 {
+        if b.done() {
+            break;
+        }
+        let op = b.u8();
+        match op % 12 {
+            0 => {
+                let g = b.point(w, h);
+                let _ = p.set_goal(g);
+            }
+            1 => p.clear_goal(),
+            2..=5 => {
+                // Plan: the agent moves towards its last waypoint (most often), teleports, or
+                // is placed anywhere.
+                let next = match op % 12 {
+                    2 | 3 => agent.step_towards(waypoint, 0.1 + b.unit() * cfg.e_max),
+                    4 => b.point(w, h),
+                    _ => p.root_position(),
+                };
+                match b.u8() % 4 {
+                    0 => {}
+                    1 => clock.advance(b.u16() as u64 * 1_000),
+                    2 => clock.advance(u64::MAX / 2),
+                    _ => clock.advance(b.u16() as u64),
+                }
+                match p.plan(&clock, next) {
+                    Ok(pr) => {
+                        agent = next;
+                        waypoint = pr.waypoint;
+                        if pr.waypoint != agent && !p.map().free_path(agent, pr.waypoint) {
+                            return Err(format!(
+                                "waypoint {:?} not reachable from {agent:?}: {pr:?}",
+                                pr.waypoint
+                            ));
+                        }
+                        if pr.work > cfg.max_work_per_call as u64 + 64 * N as u64 + 100_000 {
+                            return Err(format!("unbounded call: {pr:?}"));
+                        }
+                    }
+                    Err(_) => {
+                        if next.is_finite() && grid.contains(next) && grid.point_free(next) {
+                            return Err(format!("a valid agent position {next:?} refused"));
+                        }
+                    }
+                }
+            }
+            6 => {
+                let _ = p.grow(&clock);
+            }
+            7..=9 => {
+                // A circle: anywhere, on the agent, between agent and waypoint, on the goal.
+                let r = b.unit() * w.max(h) * 0.1;
+                let c = match op % 12 {
+                    7 => b.point(w, h),
+                    8 => agent.lerp(waypoint, b.unit()),
+                    _ => p.goal().unwrap_or(agent),
+                };
+                if let Ok(id) = p.add_obstacle(Circle::new(c, r)) {
+                    ids.push(id);
+                }
+            }
+            10 => {
+                if !ids.is_empty() {
+                    let id = ids.remove(b.u8() as usize % ids.len());
+                    p.remove_obstacle(id).map_err(|e| format!("remove: {e}"))?;
+                }
+            }
+            _ => {
+                let _ = p.path(&mut path);
+            }
+        }
+        p.tree()
+            .validate()
+            .map_err(|e| format!("forward tree: {e:?}"))?;
+        p.reverse_tree()
+            .validate()
+            .map_err(|e| format!("reverse tree: {e:?}"))?;
+    }
+    Ok(())
+}
