@@ -94,7 +94,7 @@ where
     let mut res = RunResult::default();
     for call in 0..protocol.max_calls {
         let p = planner.plan(clock, agent)?;
-        res.calls = call + 1;
+        res.calls = call.saturating_add(1);
         res.last = Some(p);
         if let Some(found) = planner.stats().goal_found_at {
             res.search_ticks.get_or_insert(found.saturating_sub(t0));
@@ -105,7 +105,7 @@ where
                 }
                 let step = agent.step_towards(p.waypoint, protocol.speed);
                 if !planner.map().free_path(agent, step) {
-                    res.collisions += 1;
+                    res.collisions = res.collisions.saturating_add(1);
                 }
                 res.travelled += agent.dist(step);
                 agent = step;

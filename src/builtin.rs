@@ -30,6 +30,7 @@ const fn b(x0: u16, y0: u16, x1: u16, y1: u16) -> Block {
 
 /// Packs blocks into the bit layout of [`OccupancyGrid`] at compile time. `BYTES` must be
 /// `ceil(width * height / 8)`.
+#[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)] // const-evaluated for the built-in statics: a bad block fails the build
 pub const fn pack_blocks<const BYTES: usize>(
     width: u16,
     height: u16,

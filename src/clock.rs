@@ -48,10 +48,13 @@ pub trait Clock {
 
     /// A tick count of this clock as a duration.
     fn duration(&self, ticks: u64) -> Duration {
-        let rate = self.ticks_per_second().max(1);
+        let rate = core::num::NonZeroU64::new(self.ticks_per_second())
+            .unwrap_or(core::num::NonZeroU64::MIN);
         let (secs, rest) = (ticks / rate, ticks % rate);
-        // rest < rate, so rest * 10^9 / rate < 10^9 fits a u32.
-        let nanos = (rest as u128 * 1_000_000_000 / rate as u128) as u64;
+        // rest < rate, so rest * 10^9 / rate < 10^9.
+        let nanos =
+            (rest as u128).saturating_mul(1_000_000_000) / core::num::NonZeroU128::from(rate);
+        let nanos = u64::try_from(nanos).unwrap_or(999_999_999);
         Duration::from_secs(secs).saturating_add(Duration::from_nanos(nanos))
     }
 }

@@ -189,6 +189,7 @@ impl Config {
     /// The 20 planners of the paper's Table 1, row by row: original, bidirectional only (`-1`),
     /// new rewiring only (`-2`), both (`Bi-`); in each row RT-RRT*, RT-RRT*(D), AM-RRT*(E),
     /// AM-RRT*(D), AM-RRT*(G).
+    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)] // 4 x 5 fixed loops
     pub const fn table1() -> [Config; 20] {
         let bases = [
             Self::rt_rrt(MetricKind::Euclidean),

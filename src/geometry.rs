@@ -8,6 +8,9 @@
 //! point in the informed ellipse whose foci are the root and the goal and whose major axis is the
 //! current best cost (Gammell et al.'s informed sampling, used by AM-RRT* and Bi-AM-RRT*).
 
+// `Point` operators are f32 maths (never a panic); the integer-overflow lint cannot tell.
+#![allow(clippy::arithmetic_side_effects)]
+
 use core::ops::{Add, Mul, Sub};
 
 use rand_core::Rng;

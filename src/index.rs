@@ -17,6 +17,7 @@ use core::ops::ControlFlow;
 
 use crate::error::IndexError;
 use crate::geometry::Point;
+use crate::slots::{cell_index, rd, sat_u32, to_u16, wr};
 use crate::tree::NodeId;
 
 const NONE: u16 = u16::MAX;
@@ -76,6 +77,9 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     /// Empties the index and lays its buckets over a `width x height` metre map (as
     /// [`SpatialIndex::with_bounds`]). Returns `false`, leaving the index unchanged, unless all
     /// three are finite and positive.
+    // The f64 counts are whole numbers in 1..=B < 65,535 once checked, and the f32 side is
+    // checked finite and positive: the casts cannot truncate.
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     pub fn reshape(&mut self, width: f32, height: f32, min_side: f32) -> bool {
         let good = |v: f32| v.is_finite() && v > 0.0;
         if !(good(width) && good(height) && good(min_side)) {
@@ -156,20 +160,20 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         if !p.is_finite() {
             return Err(IndexError::NotFinite);
         }
-        if self.bucket_of[i] != NONE {
+        if rd(&self.bucket_of, i, NONE) != NONE {
             return Err(IndexError::Membership);
         }
         let (c, r) = self.bucket_coords(p);
-        let b = r as usize * self.cols as usize + c as usize;
-        let first = self.head[b];
-        self.next[i] = first;
-        self.prev[i] = NONE;
+        let b = cell_index(c, r, self.cols);
+        let first = rd(&self.head, b, NONE);
+        wr(&mut self.next, i, first);
+        wr(&mut self.prev, i, NONE);
         if first != NONE {
-            self.prev[first as usize] = id.0;
+            wr(&mut self.prev, first as usize, id.0);
         }
-        self.head[b] = id.0;
-        self.bucket_of[i] = b as u16;
-        self.len += 1;
+        wr(&mut self.head, b, id.0);
+        wr(&mut self.bucket_of, i, to_u16(b));
+        self.len = self.len.saturating_add(1);
         Ok(())
     }
 
@@ -180,17 +184,17 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         if b == NONE {
             return Err(IndexError::Membership);
         }
-        let (prev, next) = (self.prev[i], self.next[i]);
+        let (prev, next) = (rd(&self.prev, i, NONE), rd(&self.next, i, NONE));
         if prev == NONE {
-            self.head[b as usize] = next;
+            wr(&mut self.head, b as usize, next);
         } else {
-            self.next[prev as usize] = next;
+            wr(&mut self.next, prev as usize, next);
         }
         if next != NONE {
-            self.prev[next as usize] = prev;
+            wr(&mut self.prev, next as usize, prev);
         }
-        self.bucket_of[i] = NONE;
-        self.len -= 1;
+        wr(&mut self.bucket_of, i, NONE);
+        self.len = self.len.saturating_sub(1);
         Ok(())
     }
 
@@ -200,6 +204,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     }
 
     /// The nearest indexed node among those for which `accept` is true.
+    #[allow(clippy::arithmetic_side_effects)] // bucket coordinates and rings < 65,536: no i32 overflow
     pub fn nearest_where<F>(
         &self,
         q: Point,
@@ -274,7 +279,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         let (c1, r1) = self.bucket_coords(Point::new(q.x + radius, q.y + radius));
         for row in r0..=r1 {
             for col in c0..=c1 {
-                let b = row as usize * self.cols as usize + col as usize;
+                let b = cell_index(col, row, self.cols);
                 self.for_each_in_bucket(b, |id| match positions.get(id.index()) {
                     Some(p) => {
                         let d2 = p.dist_sq(q);
@@ -301,9 +306,9 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         out: &mut heapless::Vec<NodeId, K>,
     ) -> usize {
         out.clear();
-        let mut found = 0;
+        let mut found: usize = 0;
         let _ = self.for_each_within(q, radius, positions, |id, _| {
-            found += 1;
+            found = found.saturating_add(1);
             let _ = out.push(id);
             ControlFlow::Continue(())
         });
@@ -312,8 +317,8 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
 
     fn bucket_coords(&self, p: Point) -> (u16, u16) {
         // Saturating float-to-int casts map NaN and negatives to 0; clamp the far side.
-        let c = ((p.x * self.inv_side) as u32).min((self.cols as u32).saturating_sub(1)) as u16;
-        let r = ((p.y * self.inv_side) as u32).min((self.rows as u32).saturating_sub(1)) as u16;
+        let c = to_u16(sat_u32(p.x * self.inv_side).min(u32::from(self.cols).saturating_sub(1)));
+        let r = to_u16(sat_u32(p.y * self.inv_side).min(u32::from(self.rows).saturating_sub(1)));
         (c, r)
     }
 
@@ -327,12 +332,13 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
                 break;
             }
             f(NodeId(v))?;
-            v = self.next[v as usize];
+            v = rd(&self.next, v as usize, NONE);
         }
         ControlFlow::Continue(())
     }
 
     /// Visits the in-grid buckets at Chebyshev distance exactly `k` from bucket `(qc, qr)`.
+    #[allow(clippy::arithmetic_side_effects)] // bucket coordinates and rings < 65,536: no i32 overflow
     fn for_each_ring_bucket<F>(&self, qc: i32, qr: i32, k: i32, mut f: F) -> ControlFlow<()>
     where
         F: FnMut(usize) -> ControlFlow<()>,
@@ -340,7 +346,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         let (cols, rows) = (self.cols as i32, self.rows as i32);
         let mut visit = |c: i32, r: i32| {
             if c >= 0 && r >= 0 && c < cols && r < rows {
-                f((r * cols + c) as usize)
+                f(usize::try_from(r * cols + c).unwrap_or(usize::MAX))
             } else {
                 ControlFlow::Continue(())
             }
@@ -366,7 +372,7 @@ pub fn linear_nearest(positions: &[Point], q: Point) -> Option<(NodeId, f32)> {
     for (i, p) in positions.iter().enumerate() {
         let d2 = p.dist_sq(q);
         if best.is_none_or(|(_, bd)| d2 < bd) {
-            best = Some((NodeId(i as u16), d2));
+            best = Some((NodeId(to_u16(i)), d2));
         }
     }
     best
@@ -377,7 +383,7 @@ pub fn linear_nearest(positions: &[Point], q: Point) -> Option<(NodeId, f32)> {
 pub fn linear_within<F: FnMut(NodeId)>(positions: &[Point], q: Point, radius: f32, mut f: F) {
     for (i, p) in positions.iter().enumerate() {
         if p.dist_sq(q) <= radius * radius {
-            f(NodeId(i as u16));
+            f(NodeId(to_u16(i)));
         }
     }
 }

@@ -71,6 +71,25 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// No reachable panic (promise 2): the non-test code may not index, unwrap, panic, overflow an
+// integer or truncate in a cast. Local `allow`s carry a one-line reason; the panic-never build
+// (`tests/panic-never`) checks the result at link time.
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::indexing_slicing,
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+        clippy::arithmetic_side_effects,
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss,
+        clippy::cast_possible_wrap
+    )
+)]
 
 pub mod agent;
 pub mod builtin;
@@ -85,6 +104,7 @@ pub mod planner;
 mod rewire;
 pub mod sample;
 pub mod search;
+mod slots;
 pub mod sweep;
 pub mod tree;
 

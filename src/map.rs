@@ -38,6 +38,7 @@ use core::ops::ControlFlow;
 
 use crate::error::{InputError, MapError, ObstacleError};
 use crate::geometry::{Point, segment_point_dist_sq};
+use crate::slots::{cell_index, sat_u32, to_u16};
 
 /// Safety margin of the grid collision test, in cells (see the module documentation).
 pub const CONTACT_MARGIN: f32 = 1.0e-3;
@@ -55,6 +56,7 @@ pub struct OccupancyGrid<'a> {
 impl<'a> OccupancyGrid<'a> {
     /// Bytes needed to hold `width * height` cells at one bit each.
     pub const fn bytes_needed(width: u16, height: u16) -> usize {
+        #[allow(clippy::arithmetic_side_effects)] // u16 * u16 < 2^32 fits usize
         (width as usize * height as usize).div_ceil(8)
     }
 
@@ -124,7 +126,7 @@ impl<'a> OccupancyGrid<'a> {
         if col >= self.width || row >= self.height {
             return true;
         }
-        let i = row as usize * self.width as usize + col as usize;
+        let i = cell_index(col, row, self.width);
         self.bits.get(i / 8).is_none_or(|b| b & (1 << (i % 8)) != 0)
     }
 
@@ -141,8 +143,9 @@ impl<'a> OccupancyGrid<'a> {
         if !self.contains(p) {
             return None;
         }
-        let col = ((p.x * self.inv_cell) as u32).min(self.width as u32 - 1) as u16;
-        let row = ((p.y * self.inv_cell) as u32).min(self.height as u32 - 1) as u16;
+        let col = to_u16(sat_u32(p.x * self.inv_cell).min(u32::from(self.width).saturating_sub(1)));
+        let row =
+            to_u16(sat_u32(p.y * self.inv_cell).min(u32::from(self.height).saturating_sub(1)));
         Some((col, row))
     }
 
@@ -200,6 +203,7 @@ impl<'a> OccupancyGrid<'a> {
             return ControlFlow::Break(());
         }
         // Work in cell units with y increasing from a to b.
+        #[allow(clippy::arithmetic_side_effects)] // `Point` * f32: float maths
         let (mut p, mut q) = (a * self.inv_cell, b * self.inv_cell);
         if p.y > q.y {
             core::mem::swap(&mut p, &mut q);
@@ -207,8 +211,11 @@ impl<'a> OccupancyGrid<'a> {
         let (dx, dy) = (q.x - p.x, q.y - p.y);
         // Cell indices: values below zero truncate to 0 like a clamped floor; the far side is
         // clamped to the last row or column.
-        let (max_row, max_col) = (self.height as u32 - 1, self.width as u32 - 1);
-        let index = |v: f32, max: u32| ((v.max(0.0)) as u32).min(max) as u16;
+        let (max_row, max_col) = (
+            u32::from(self.height).saturating_sub(1),
+            u32::from(self.width).saturating_sub(1),
+        );
+        let index = |v: f32, max: u32| to_u16(sat_u32(v).min(max));
         if q.y + M < 0.0 || p.y - M > self.height as f32 {
             return ControlFlow::Continue(());
         }
@@ -236,11 +243,13 @@ impl<'a> OccupancyGrid<'a> {
 
     /// Whether cells `c0..=c1` of `row` are all free (a bit-range test, a byte at a time).
     fn span_free(&self, row: u16, c0: u16, c1: u16) -> bool {
-        let base = row as usize * self.width as usize;
-        let (i0, i1) = (base + c0 as usize, base + c1 as usize);
+        let (i0, i1) = (
+            cell_index(c0, row, self.width),
+            cell_index(c1, row, self.width),
+        );
         let (b0, b1) = (i0 / 8, i1 / 8);
         let lo_mask = 0xffu8 << (i0 % 8);
-        let hi_mask = 0xffu8 >> (7 - i1 % 8);
+        let hi_mask = 0xffu8 >> ((i1 % 8) ^ 7); // 7 - i1 % 8
         let Some(bytes) = self.bits.get(b0..=b1) else {
             return false;
         };
@@ -276,7 +285,7 @@ where
     for row in 0..height {
         for col in 0..width {
             if occupied(col, row) {
-                let i = row as usize * width as usize + col as usize;
+                let i = cell_index(col, row, width);
                 if let Some(b) = bits.get_mut(i / 8) {
                     *b |= 1 << (i % 8);
                 }

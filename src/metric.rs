@@ -33,6 +33,7 @@
 //! `i16::MIN` (kind 1) or NaN (kind 2) is unreachable.
 
 use crate::geometry::Point;
+use crate::slots::{cell_index, sat_u32, to_u16};
 
 /// The assisting metric of the planner (the paper's `d_A`).
 pub trait Metric {
@@ -202,7 +203,7 @@ impl TableHeader {
             (28, &checksum.to_le_bytes()),
         ];
         for (at, bytes) in fields {
-            if let Some(dst) = h.get_mut(at..at + bytes.len()) {
+            if let Some(dst) = h.get_mut(at..at.saturating_add(bytes.len())) {
                 dst.copy_from_slice(bytes);
             }
         }
@@ -211,11 +212,15 @@ impl TableHeader {
 }
 
 fn le_u16(b: &[u8], at: usize) -> Option<u16> {
-    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
+    Some(u16::from_le_bytes(
+        b.get(at..at.checked_add(2)?)?.try_into().ok()?,
+    ))
 }
 
 fn le_u32(b: &[u8], at: usize) -> Option<u32> {
-    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+    Some(u32::from_le_bytes(
+        b.get(at..at.checked_add(4)?)?.try_into().ok()?,
+    ))
 }
 
 /// The diffusion metric `d_D` over a borrowed, validated table (format in the module docs).
@@ -297,20 +302,20 @@ impl<'a> DiffusionTable<'a> {
         if !(x >= 0.0 && y >= 0.0) {
             return None;
         }
-        let (c, r) = (x as u32, y as u32);
+        let (c, r) = (sat_u32(x), sat_u32(y));
         let (cols, rows) = (self.header.cols as u32, self.header.rows as u32);
         // A point on the far edge of the map belongs to the last cell.
         let c = if c == cols && x == cols as f32 {
-            c - 1
+            c.saturating_sub(1)
         } else {
             c
         };
         let r = if r == rows && y == rows as f32 {
-            r - 1
+            r.saturating_sub(1)
         } else {
             r
         };
-        (c < cols && r < rows).then(|| (r * cols + c) as usize)
+        (c < cols && r < rows).then(|| cell_index(to_u16(c), to_u16(r), to_u16(cols)))
     }
 
     /// Reads coordinate `d` of `cell` as stored (before scaling); `None` if unreachable.
@@ -380,6 +385,12 @@ impl Metric for DiffusionTable<'_> {
     }
 }
 
+/// The `i16` element of a coordinate: rounded and clamped to `-32767..=32767` (NaN gives 0).
+#[allow(clippy::cast_possible_truncation)] // clamped into i16 range first; the cast saturates
+fn quantise(v: f32) -> i16 {
+    libm::roundf(v).clamp(-32767.0, 32767.0) as i16
+}
+
 /// Writes a table (header and payload) into `out` from per-cell coordinates given by
 /// `coords(col, row, &mut [f32]) -> bool` (false: unreachable). Returns the bytes written, or
 /// `None` when `out` is too small or the header is invalid. For `ElementKind::I16` each
@@ -397,16 +408,17 @@ where
     let (head, payload) = out.split_at_mut(TABLE_HEADER_LEN);
     let mut buf = [0f32; TABLE_MAX_DIMS];
     let size = header.kind.size();
-    let mut at = 0;
+    let mut at: usize = 0;
     for row in 0..header.rows {
         for col in 0..header.cols {
-            let reachable = coords(col, row, &mut buf[..k]);
-            for &v in &buf[..k] {
-                let dst = payload.get_mut(at..at + size)?;
+            let coords_of_cell = buf.get_mut(..k)?;
+            let reachable = coords(col, row, coords_of_cell);
+            for &v in coords_of_cell.iter() {
+                let dst = payload.get_mut(at..at.checked_add(size)?)?;
                 match header.kind {
                     ElementKind::I16 => {
                         let q = if reachable {
-                            libm::roundf(v / header.scale).clamp(-32767.0, 32767.0) as i16
+                            quantise(v / header.scale)
                         } else {
                             i16::MIN
                         };
@@ -421,7 +433,7 @@ where
                         dst.copy_from_slice(&q.to_le_bytes());
                     }
                 }
-                at += size;
+                at = at.checked_add(size)?;
             }
         }
     }

@@ -45,6 +45,7 @@ use crate::map::{Circle, Map, ObstacleId};
 use crate::metric::Metric;
 use crate::rewire::Slice;
 use crate::search::{Env, Near, Target, TreeStore};
+use crate::slots::units;
 use crate::tree::{Cost, NodeId, Tree};
 
 /// Storage for a planner's two trees: `N` nodes and `B` index buckets each. Keep it wherever
@@ -446,7 +447,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.full = false;
         while expansions < self.cfg.max_expansions_per_call && !meter.expired(&call) {
             self.step(meter, call);
-            expansions += 1;
+            expansions = expansions.saturating_add(1);
         }
         expansions
     }
@@ -514,8 +515,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             && d2 < env.duplicate_sq()
             && self.fwd.tree.set_root(q).is_ok()
         {
-            meter.charge(N as u32 / 8);
-            self.stats.reanchored += 1;
+            meter.charge(units(N / 8));
+            self.stats.reanchored = self.stats.reanchored.saturating_add(1);
             self.fwd.restart_sweeps();
             return;
         }
@@ -548,15 +549,15 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             let Ok(id) = self.fwd.insert(agent, keep[0], blocked) else {
                 return false;
             };
-            meter.charge(N as u32 / 8);
+            meter.charge(units(N / 8));
             self.fwd.tree.set_root(id).is_ok()
         });
         if anchored {
-            self.stats.reanchored += 1;
+            self.stats.reanchored = self.stats.reanchored.saturating_add(1);
             self.fwd.restart_sweeps();
         } else {
             // No node reaches the agent (or no room): the tree cannot serve it; start over here.
-            self.stats.restarted += 1;
+            self.stats.restarted = self.stats.restarted.saturating_add(1);
             self.fwd.reset(agent);
             if let Some(goal) = self.goal {
                 self.begin_search(goal.pos);
@@ -600,7 +601,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.free_path(agent, self.fwd.pos(next)) {
             return false;
         }
-        meter.charge(N as u32 / 8);
+        meter.charge(units(N / 8));
         if self.fwd.tree.set_root(next).is_err() {
             return false;
         }
@@ -622,7 +623,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         Slice {
             deadline: meter.deadline(budget, call),
             // A frozen clock must still end the phase: never more than 4 sweeps of the arena.
-            visits: visits.min(4 * N as u32),
+            visits: visits.min(units(N).saturating_mul(4)),
         }
     }
 
@@ -637,7 +638,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             .fwd
             .expand(&env, &mut self.rng, self.goal.as_mut(), meter);
         self.full |= grown.full;
-        self.stats.expansions += 1;
+        self.stats.expansions = self.stats.expansions.saturating_add(1);
         if grown.goal_joined {
             self.goal_joined(meter);
         } else if let (Some(a), true) = (grown.added, self.rev_goal.is_some()) {
@@ -673,7 +674,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 .rev
                 .expand(&env, &mut self.rng, self.rev_goal.as_mut(), meter);
             self.full |= grown.full;
-            self.stats.reverse_expansions += 1;
+            self.stats.reverse_expansions = self.stats.reverse_expansions.saturating_add(1);
             if let Some(b) = grown.added {
                 self.try_meet(b, false, meter);
             }
@@ -720,7 +721,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let _ = other
             .index
             .for_each_within(p, sigma, other.tree.positions(), |id, d2| {
-                seen += 1;
+                seen = seen.saturating_add(1);
                 let c_other = other.cost(id);
                 let total = Cost {
                     length: c_new.length + libm::sqrtf(d2) + c_other.length,
@@ -735,7 +736,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 }
                 core::ops::ControlFlow::Continue(())
             });
-        meter.charge(seen + 4);
+        meter.charge(seen.saturating_add(4));
         let env = Env {
             map: &self.map,
             metric: &self.metric,
@@ -766,14 +767,14 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let mut depth = 0usize;
         let mut v = Some(b);
         while let Some(x) = v {
-            depth += 1;
+            depth = depth.saturating_add(1);
             if depth > rev.len() {
                 return false;
             }
             v = rev.parent(x);
         }
         let mut parent = a;
-        let need = (self.fwd.tree.len() + depth).saturating_sub(N);
+        let need = self.fwd.tree.len().saturating_add(depth).saturating_sub(N);
         if need > 0 {
             // Make room: recycle forward leaves (never `a` or its ancestors, which have
             // children). Refused when the trunk alone would not fit.
@@ -790,7 +791,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
             parent = keep[0];
         }
-        meter.charge(4 * depth as u32);
+        meter.charge(units(depth).saturating_mul(4));
         let mut blocked = false; // the meeting segment was tested free
         let mut v = Some(b);
         while let Some(x) = v {

@@ -25,6 +25,7 @@ use crate::index::SpatialIndex;
 use crate::map::Map;
 use crate::metric::Metric;
 use crate::sample::{GoalView, sample_state};
+use crate::slots::{sat_u32, to_u16, units};
 use crate::sweep::{NodeQueue, NodeStack, SeenSet};
 use crate::tree::{Cost, NodeId, Tree};
 use rand_core::Rng;
@@ -144,7 +145,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         meter: &Meter<'_, C>,
     ) -> usize {
         let n = self.index.within(p, radius, self.tree.positions(), out);
-        meter.charge(4 + n as u32);
+        meter.charge(units(n).saturating_add(4));
         n
     }
 }
@@ -161,7 +162,7 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
     pub fn free<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> bool {
         let inv = 1.0 / self.map.grid().cell_size();
         let cells = (libm::fabsf(a.x - b.x) + libm::fabsf(a.y - b.y)) * inv;
-        meter.charge(2 + cells as u32);
+        meter.charge(sat_u32(cells).saturating_add(2));
         self.map.free_path(a, b)
     }
 
@@ -500,7 +501,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let score = |s: &Self, id: NodeId| s.cost(id).extend(s.pos(id).dist(toward), false);
         let mut best: Option<(Cost, NodeId)> = None;
         for _ in 0..DRAWS {
-            let id = NodeId((rng.next_u32() % len as u32) as u16);
+            let id = NodeId(to_u16(rng.next_u32().checked_rem(units(len)).unwrap_or(0)));
             if usable(self, id) {
                 let sc = score(self, id);
                 if best.is_none_or(|(b, _)| sc > b) {
@@ -508,16 +509,16 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 }
             }
         }
-        let mut scanned = 0;
+        let mut scanned: usize = 0;
         if best.is_none() {
-            let from = rng.next_u32() as usize % len;
+            let from = rng.next_u32() as usize;
             best = (0..len)
-                .map(|i| NodeId(((from + i) % len) as u16))
-                .inspect(|_| scanned += 1)
+                .map(|i| NodeId(to_u16(from.wrapping_add(i).checked_rem(len).unwrap_or(0))))
+                .inspect(|_| scanned = scanned.saturating_add(1))
                 .find(|&id| usable(self, id))
                 .map(|id| (score(self, id), id));
         }
-        meter.charge((DRAWS + scanned) as u32 + 8);
+        meter.charge(units(DRAWS.saturating_add(scanned)).saturating_add(8));
         let Some((_, victim)) = best else {
             return false;
         };

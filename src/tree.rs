@@ -18,6 +18,7 @@ use core::cmp::Ordering;
 
 use crate::error::TreeError;
 use crate::geometry::Point;
+use crate::slots::{copy_slot, rd, wr};
 
 const NONE: u16 = u16::MAX;
 
@@ -182,8 +183,8 @@ impl<const N: usize> Tree<N> {
         self.len = 1;
         self.root = 0;
         self.init_node(0, pos, NONE);
-        self.cost[0] = 0.0;
-        self.flags[0] = 0;
+        wr(&mut self.cost, 0, 0.0);
+        wr(&mut self.flags, 0, 0);
         NodeId(0)
     }
 
@@ -209,7 +210,7 @@ impl<const N: usize> Tree<N> {
 
     /// The positions of all nodes, indexed by [`NodeId::index`] (what the spatial index reads).
     pub fn positions(&self) -> &[Point] {
-        &self.pos[..self.len as usize]
+        self.pos.get(..self.len as usize).unwrap_or(&[])
     }
 
     /// Position of a node.
@@ -230,20 +231,20 @@ impl<const N: usize> Tree<N> {
         if !self.contains(id) {
             return None;
         }
-        let p = self.parent[id.index()];
+        let p = rd(&self.parent, id.index(), NONE);
         (p != NONE).then_some(NodeId(p))
     }
 
     /// Whether the edge from the node's parent is marked as crossing a dynamic obstacle.
     pub fn edge_blocked(&self, id: NodeId) -> Option<bool> {
         self.contains(id)
-            .then(|| self.flags[id.index()] & EDGE_BLOCKED != 0)
+            .then(|| rd(&self.flags, id.index(), 0) & EDGE_BLOCKED != 0)
     }
 
     /// The children of a node, most recently attached first.
     pub fn children(&self, id: NodeId) -> Children<'_, N> {
         let first = if self.contains(id) {
-            self.first_child[id.index()]
+            rd(&self.first_child, id.index(), NONE)
         } else {
             NONE
         };
@@ -267,7 +268,7 @@ impl<const N: usize> Tree<N> {
             if v == NONE {
                 return false;
             }
-            v = self.parent[v as usize];
+            v = rd(&self.parent, v as usize, NONE);
         }
         false
     }
@@ -287,10 +288,14 @@ impl<const N: usize> Tree<N> {
             return Err(TreeError::Full);
         }
         let id = self.len;
-        self.len += 1;
+        self.len = self.len.saturating_add(1);
         self.init_node(id, pos, NONE);
         self.link(id, parent.0);
-        self.flags[id as usize] = if edge_blocked { EDGE_BLOCKED } else { 0 };
+        wr(
+            &mut self.flags,
+            id as usize,
+            if edge_blocked { EDGE_BLOCKED } else { 0 },
+        );
         self.refresh_cost(id);
         Ok(NodeId(id))
     }
@@ -323,7 +328,7 @@ impl<const N: usize> Tree<N> {
         if !self.contains(child) {
             return Err(TreeError::UnknownNode);
         }
-        if self.parent[child.index()] != NONE {
+        if rd(&self.parent, child.index(), NONE) != NONE {
             self.set_flag(child.0, EDGE_BLOCKED, blocked);
             self.refresh_subtree(child.0);
         }
@@ -337,8 +342,12 @@ impl<const N: usize> Tree<N> {
         F: FnMut(Point, Point) -> bool,
     {
         for v in 0..self.len {
-            let p = self.parent[v as usize];
-            let b = p != NONE && blocked(self.pos[p as usize], self.pos[v as usize]);
+            let p = rd(&self.parent, v as usize, NONE);
+            let b = p != NONE
+                && blocked(
+                    rd(&self.pos, p as usize, Point::ZERO),
+                    rd(&self.pos, v as usize, Point::ZERO),
+                );
             self.set_flag(v, EDGE_BLOCKED, b);
         }
         self.refresh_subtree(self.root);
@@ -357,8 +366,8 @@ impl<const N: usize> Tree<N> {
             if cur == NONE {
                 break;
             }
-            let next = self.parent[cur as usize];
-            let flag = self.flags[cur as usize] & EDGE_BLOCKED != 0;
+            let next = rd(&self.parent, cur as usize, NONE);
+            let flag = rd(&self.flags, cur as usize, 0) & EDGE_BLOCKED != 0;
             self.unlink(cur);
             if prev != NONE {
                 self.link(cur, prev);
@@ -387,40 +396,40 @@ impl<const N: usize> Tree<N> {
             return Err(TreeError::NotALeaf);
         }
         self.unlink(id.0);
-        let last = self.len - 1;
+        let last = self.len.saturating_sub(1);
         self.len = last;
         if id.0 == last {
             return Ok(None);
         }
         // Move `last` into `id`'s slot and point every link at it.
         let (from, to) = (last as usize, id.index());
-        self.pos[to] = self.pos[from];
-        self.cost[to] = self.cost[from];
-        self.flags[to] = self.flags[from];
+        copy_slot(&mut self.pos, from, to);
+        copy_slot(&mut self.cost, from, to);
+        copy_slot(&mut self.flags, from, to);
         let (parent, prev, next) = (
-            self.parent[from],
-            self.prev_sibling[from],
-            self.next_sibling[from],
+            rd(&self.parent, from, NONE),
+            rd(&self.prev_sibling, from, NONE),
+            rd(&self.next_sibling, from, NONE),
         );
-        self.parent[to] = parent;
-        self.prev_sibling[to] = prev;
-        self.next_sibling[to] = next;
-        self.first_child[to] = self.first_child[from];
+        wr(&mut self.parent, to, parent);
+        wr(&mut self.prev_sibling, to, prev);
+        wr(&mut self.next_sibling, to, next);
+        copy_slot(&mut self.first_child, from, to);
         if prev != NONE {
-            self.next_sibling[prev as usize] = id.0;
+            wr(&mut self.next_sibling, prev as usize, id.0);
         } else if parent != NONE {
-            self.first_child[parent as usize] = id.0;
+            wr(&mut self.first_child, parent as usize, id.0);
         }
         if next != NONE {
-            self.prev_sibling[next as usize] = id.0;
+            wr(&mut self.prev_sibling, next as usize, id.0);
         }
-        let mut c = self.first_child[to];
+        let mut c = rd(&self.first_child, to, NONE);
         for _ in 0..self.len {
             if c == NONE {
                 break;
             }
-            self.parent[c as usize] = id.0;
-            c = self.next_sibling[c as usize];
+            wr(&mut self.parent, c as usize, id.0);
+            c = rd(&self.next_sibling, c as usize, NONE);
         }
         if self.root == last {
             self.root = id.0;
@@ -436,7 +445,7 @@ impl<const N: usize> Tree<N> {
 
     /// Like [`Tree::path_ids`], writing positions.
     pub fn path_points(&self, to: NodeId, buf: &mut [Point]) -> Result<usize, TreeError> {
-        self.write_path(to, buf, |v| self.pos[v as usize])
+        self.write_path(to, buf, |v| rd(&self.pos, v as usize, Point::ZERO))
     }
 
     /// Walks from `to` up to the root writing `item(node)` for each, then reverses.
@@ -457,10 +466,12 @@ impl<const N: usize> Tree<N> {
                 return Err(TreeError::WouldCycle);
             }
             *buf.get_mut(n).ok_or(TreeError::BufferTooSmall)? = item(v);
-            n += 1;
-            v = self.parent[v as usize];
+            n = n.saturating_add(1);
+            v = rd(&self.parent, v as usize, NONE);
         }
-        buf[..n].reverse();
+        if let Some(path) = buf.get_mut(..n) {
+            path.reverse();
+        }
         Ok(n)
     }
 
@@ -477,15 +488,15 @@ impl<const N: usize> Tree<N> {
             let i = v as usize;
             let id = NodeId(v);
             let links = [
-                self.parent[i],
-                self.first_child[i],
-                self.next_sibling[i],
-                self.prev_sibling[i],
+                rd(&self.parent, i, NONE),
+                rd(&self.first_child, i, NONE),
+                rd(&self.next_sibling, i, NONE),
+                rd(&self.prev_sibling, i, NONE),
             ];
             if !links.iter().all(|&l| ok(l)) {
                 return Err(Invariant::DanglingLink(id));
             }
-            if (v == self.root) != (self.parent[i] == NONE) {
+            if (v == self.root) != (rd(&self.parent, i, NONE) == NONE) {
                 return Err(Invariant::RootParent(id));
             }
             // Reaches the root within n steps.
@@ -494,21 +505,21 @@ impl<const N: usize> Tree<N> {
             }
             // Every child lists this node as parent, and the back links agree.
             let mut prev = NONE;
-            let mut c = self.first_child[i];
+            let mut c = rd(&self.first_child, i, NONE);
             let mut count = 0u16;
             while c != NONE {
-                count += 1;
+                count = count.saturating_add(1);
                 if count > n
-                    || self.parent[c as usize] != v
-                    || self.prev_sibling[c as usize] != prev
+                    || rd(&self.parent, c as usize, NONE) != v
+                    || rd(&self.prev_sibling, c as usize, NONE) != prev
                 {
                     return Err(Invariant::ChildList(id));
                 }
                 prev = c;
-                c = self.next_sibling[c as usize];
+                c = rd(&self.next_sibling, c as usize, NONE);
             }
             // And this node appears in its parent's list.
-            let p = self.parent[i];
+            let p = rd(&self.parent, i, NONE);
             if p != NONE && !self.children(NodeId(p)).any(|c| c == id) {
                 return Err(Invariant::ChildList(id));
             }
@@ -518,13 +529,13 @@ impl<const N: usize> Tree<N> {
         // means by induction that each cached cost equals the sum along its root path.
         for v in 0..n {
             let i = v as usize;
-            let p = self.parent[i];
+            let p = rd(&self.parent, i, NONE);
             let expected = if p == NONE {
                 Cost::ZERO
             } else {
                 self.cost_of(p).extend(
-                    self.pos[p as usize].dist(self.pos[i]),
-                    self.flags[i] & EDGE_BLOCKED != 0,
+                    rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, i, Point::ZERO)),
+                    rd(&self.flags, i, 0) & EDGE_BLOCKED != 0,
                 )
             };
             let cached = self.cost_of(v);
@@ -541,71 +552,75 @@ impl<const N: usize> Tree<N> {
 
     fn cost_of(&self, v: u16) -> Cost {
         Cost {
-            length: self.cost[v as usize],
-            blocked: self.flags[v as usize] & PATH_BLOCKED != 0,
+            length: rd(&self.cost, v as usize, 0.0),
+            blocked: rd(&self.flags, v as usize, 0) & PATH_BLOCKED != 0,
         }
     }
 
     fn init_node(&mut self, id: u16, pos: Point, parent: u16) {
         let i = id as usize;
-        self.pos[i] = pos;
-        self.parent[i] = parent;
-        self.first_child[i] = NONE;
-        self.next_sibling[i] = NONE;
-        self.prev_sibling[i] = NONE;
+        wr(&mut self.pos, i, pos);
+        wr(&mut self.parent, i, parent);
+        wr(&mut self.first_child, i, NONE);
+        wr(&mut self.next_sibling, i, NONE);
+        wr(&mut self.prev_sibling, i, NONE);
     }
 
     fn set_flag(&mut self, v: u16, bit: u8, on: bool) {
-        let f = &mut self.flags[v as usize];
-        *f = if on { *f | bit } else { *f & !bit };
+        if let Some(f) = self.flags.get_mut(v as usize) {
+            *f = if on { *f | bit } else { *f & !bit };
+        }
     }
 
     /// Pushes `c` (currently detached) at the front of `p`'s child list.
     fn link(&mut self, c: u16, p: u16) {
-        let first = self.first_child[p as usize];
-        self.parent[c as usize] = p;
-        self.prev_sibling[c as usize] = NONE;
-        self.next_sibling[c as usize] = first;
+        let first = rd(&self.first_child, p as usize, NONE);
+        wr(&mut self.parent, c as usize, p);
+        wr(&mut self.prev_sibling, c as usize, NONE);
+        wr(&mut self.next_sibling, c as usize, first);
         if first != NONE {
-            self.prev_sibling[first as usize] = c;
+            wr(&mut self.prev_sibling, first as usize, c);
         }
-        self.first_child[p as usize] = c;
+        wr(&mut self.first_child, p as usize, c);
     }
 
     /// Detaches `c` from its parent's child list (no-op for a detached node).
     fn unlink(&mut self, c: u16) {
-        let p = self.parent[c as usize];
+        let p = rd(&self.parent, c as usize, NONE);
         if p == NONE {
             return;
         }
-        let (prev, next) = (self.prev_sibling[c as usize], self.next_sibling[c as usize]);
+        let (prev, next) = (
+            rd(&self.prev_sibling, c as usize, NONE),
+            rd(&self.next_sibling, c as usize, NONE),
+        );
         if prev == NONE {
-            self.first_child[p as usize] = next;
+            wr(&mut self.first_child, p as usize, next);
         } else {
-            self.next_sibling[prev as usize] = next;
+            wr(&mut self.next_sibling, prev as usize, next);
         }
         if next != NONE {
-            self.prev_sibling[next as usize] = prev;
+            wr(&mut self.prev_sibling, next as usize, prev);
         }
-        self.parent[c as usize] = NONE;
-        self.prev_sibling[c as usize] = NONE;
-        self.next_sibling[c as usize] = NONE;
+        wr(&mut self.parent, c as usize, NONE);
+        wr(&mut self.prev_sibling, c as usize, NONE);
+        wr(&mut self.next_sibling, c as usize, NONE);
     }
 
     /// Recomputes the cached cost of `v` from its parent's.
     fn refresh_cost(&mut self, v: u16) {
         let i = v as usize;
-        let p = self.parent[i];
+        let p = rd(&self.parent, i, NONE);
         if p == NONE {
-            self.cost[i] = 0.0;
+            wr(&mut self.cost, i, 0.0);
             self.set_flag(v, PATH_BLOCKED, false);
             return;
         }
         let c = self.cost_of(p).extend(
-            self.pos[p as usize].dist(self.pos[i]),
-            self.flags[i] & EDGE_BLOCKED != 0,
+            rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, i, Point::ZERO)),
+            rd(&self.flags, i, 0) & EDGE_BLOCKED != 0,
         );
-        self.cost[i] = c.length;
+        wr(&mut self.cost, i, c.length);
         self.set_flag(v, PATH_BLOCKED, c.blocked);
     }
 
@@ -625,7 +640,7 @@ impl<const N: usize> Tree<N> {
 
     /// The node after `v` in a preorder walk of `top`'s subtree.
     fn next_preorder(&self, v: u16, top: u16) -> Option<u16> {
-        let fc = self.first_child[v as usize];
+        let fc = rd(&self.first_child, v as usize, NONE);
         if fc != NONE {
             return Some(fc);
         }
@@ -634,11 +649,11 @@ impl<const N: usize> Tree<N> {
             if u == top {
                 return None;
             }
-            let s = self.next_sibling[u as usize];
+            let s = rd(&self.next_sibling, u as usize, NONE);
             if s != NONE {
                 return Some(s);
             }
-            u = self.parent[u as usize];
+            u = rd(&self.parent, u as usize, NONE);
             if u == NONE {
                 return None;
             }
