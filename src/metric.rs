@@ -204,10 +204,18 @@ impl TableHeader {
         ];
         for (at, bytes) in fields {
             if let Some(dst) = h.get_mut(at..at.saturating_add(bytes.len())) {
-                dst.copy_from_slice(bytes);
+                copy_bytes(dst, bytes);
             }
         }
         h
+    }
+}
+
+/// Copies `src` into `dst` (lengths equal by construction; `copy_from_slice` would carry a
+/// panicking length check).
+fn copy_bytes(dst: &mut [u8], src: &[u8]) {
+    for (d, s) in dst.iter_mut().zip(src) {
+        *d = *s;
     }
 }
 
@@ -405,7 +413,7 @@ where
     }
     let total = header.table_len()?;
     let out = out.get_mut(..total)?;
-    let (head, payload) = out.split_at_mut(TABLE_HEADER_LEN);
+    let (head, payload) = out.split_at_mut_checked(TABLE_HEADER_LEN)?;
     let mut buf = [0f32; TABLE_MAX_DIMS];
     let size = header.kind.size();
     let mut at: usize = 0;
@@ -422,7 +430,7 @@ where
                         } else {
                             i16::MIN
                         };
-                        dst.copy_from_slice(&q.to_le_bytes());
+                        copy_bytes(dst, &q.to_le_bytes());
                     }
                     ElementKind::F32 => {
                         let q = if reachable {
@@ -430,7 +438,7 @@ where
                         } else {
                             f32::NAN
                         };
-                        dst.copy_from_slice(&q.to_le_bytes());
+                        copy_bytes(dst, &q.to_le_bytes());
                     }
                 }
                 at = at.checked_add(size)?;
@@ -438,7 +446,7 @@ where
         }
     }
     let sum = fnv1a32(payload);
-    head.copy_from_slice(&header.to_bytes(sum));
+    copy_bytes(head, &header.to_bytes(sum));
     Some(total)
 }
 

@@ -45,7 +45,7 @@ use crate::map::{Circle, Map, ObstacleId};
 use crate::metric::Metric;
 use crate::rewire::Slice;
 use crate::search::{Env, Near, Target, TreeStore};
-use crate::slots::units;
+use crate::slots::{sort_small_by, units};
 use crate::tree::{Cost, NodeId, Tree};
 
 /// Storage for a planner's two trees: `N` nodes and `B` index buckets each. Keep it wherever
@@ -523,11 +523,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // Candidates: nodes within e_max, cheapest first, joined to the agent past the map.
         let mut near = Near::new();
         self.fwd.nearby(agent, self.cfg.e_max, &mut near, meter);
-        near.sort_unstable_by_key(|&id| {
-            self.fwd
-                .cost(id)
-                .extend(self.fwd.pos(id).dist(agent), false)
-        });
+        let key = |id: NodeId| self.fwd.cost(id).extend(self.fwd.pos(id).dist(agent), false);
+        sort_small_by(&mut near, |&a, &b| key(a).cmp(&key(b)));
         let grid = self.map.grid();
         let parent = near.iter().copied().find(|&id| {
             meter.charge(4);

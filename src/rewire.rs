@@ -34,6 +34,7 @@ use crate::clock::{Clock, Deadline, Meter};
 use crate::geometry::{Ellipse, Point};
 use crate::metric::Metric;
 use crate::search::{Env, Near, Target, TreeStore};
+use crate::slots::sort_small_by;
 use crate::tree::NodeId;
 
 /// Limits of one rewiring call.
@@ -196,11 +197,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             let d1 = env.metric(x1_pos, goal.pos, meter);
             self.nearby(x1_pos, radius, &mut near, meter);
             // Decreasing d_A(., goal): the neighbour nearest the goal ends on top of the stack.
-            let mut keyed: heapless::Vec<(f32, NodeId), { crate::search::NEAR_CAP }> = near
-                .iter()
-                .map(|&id| (env.metric(self.pos(id), goal.pos, meter), id))
-                .collect();
-            keyed.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            let mut keyed: heapless::Vec<(f32, NodeId), { crate::search::NEAR_CAP }> =
+                heapless::Vec::new();
+            for &id in near.iter() {
+                let _ = keyed.push((env.metric(self.pos(id), goal.pos, meter), id));
+            }
+            sort_small_by(&mut keyed, |a, b| b.0.total_cmp(&a.0));
             frontier.clear();
             let parent = x2.unwrap_or(x1);
             for &(_, x_near) in keyed.iter() {

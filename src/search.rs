@@ -25,7 +25,7 @@ use crate::index::SpatialIndex;
 use crate::map::Map;
 use crate::metric::Metric;
 use crate::sample::{GoalView, sample_state};
-use crate::slots::{sat_u32, to_u16, units};
+use crate::slots::{sat_u32, sort_small_by, to_u16, units};
 use crate::sweep::{NodeQueue, NodeStack, SeenSet};
 use crate::tree::{Cost, NodeId, Tree};
 use rand_core::Rng;
@@ -571,7 +571,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         meter: &Meter<'_, C>,
     ) -> Option<NodeId> {
         let key = |id: NodeId| self.cost(id).extend(self.pos(id).dist(x), false);
-        candidates.sort_unstable_by_key(|&id| key(id));
+        sort_small_by(candidates, |&a, &b| key(a).cmp(&key(b)));
         candidates
             .iter()
             .copied()

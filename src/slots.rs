@@ -54,3 +54,69 @@ pub(crate) fn units(n: usize) -> u32 {
 pub(crate) fn to_u16(v: impl TryInto<u16>) -> u16 {
     v.try_into().unwrap_or(u16::MAX)
 }
+
+/// Sorts a short list (the planner's are at most 64 items) by `cmp`, stably, in place: an
+/// insertion sort with no allocation and, unlike `core`'s sorts (which check that `cmp` is a
+/// total order), no panicking branch.
+pub(crate) fn sort_small_by<T, F>(v: &mut [T], mut cmp: F)
+where
+    F: FnMut(&T, &T) -> core::cmp::Ordering,
+{
+    for i in 1..v.len() {
+        let Some(head) = v.get_mut(..=i) else {
+            return;
+        };
+        // Move head[i] down while it is smaller than its left neighbour.
+        let mut j = i;
+        while j > 0 {
+            let Some((left, right)) = head.split_at_mut_checked(j) else {
+                break;
+            };
+            let (Some(a), Some(b)) = (left.last_mut(), right.first_mut()) else {
+                break;
+            };
+            if cmp(b, a) != core::cmp::Ordering::Less {
+                break;
+            }
+            core::mem::swap(a, b);
+            j = j.saturating_sub(1);
+        }
+    }
+}
+
+/// Reverses a slice without a panicking branch.
+pub(crate) fn reverse(v: &mut [impl Sized]) {
+    let half = v.len() / 2;
+    if let Some((front, back)) = v.split_at_mut_checked(v.len().saturating_sub(half)) {
+        for (a, b) in front.iter_mut().zip(back.iter_mut().rev()) {
+            core::mem::swap(a, b);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_sort_and_reverse_agree_with_core() {
+        let mut seed = 12345u32;
+        for len in 0..70 {
+            let mut v: heapless::Vec<(u8, u16), 70> = heapless::Vec::new();
+            for i in 0..len {
+                seed ^= seed << 13;
+                seed ^= seed >> 17;
+                seed ^= seed << 5;
+                let _ = v.push(((seed % 7) as u8, i));
+            }
+            let mut expected = v.clone();
+            expected.sort_by_key(|x| x.0); // stable
+            sort_small_by(&mut v, |a, b| a.0.cmp(&b.0));
+            assert_eq!(v, expected);
+            let mut r = v.clone();
+            reverse(&mut r);
+            expected.reverse();
+            assert_eq!(r, expected);
+        }
+    }
+}

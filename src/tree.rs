@@ -18,7 +18,7 @@ use core::cmp::Ordering;
 
 use crate::error::TreeError;
 use crate::geometry::Point;
-use crate::slots::{copy_slot, rd, wr};
+use crate::slots::{copy_slot, rd, reverse, wr};
 
 const NONE: u16 = u16::MAX;
 
@@ -470,7 +470,7 @@ impl<const N: usize> Tree<N> {
             v = rd(&self.parent, v as usize, NONE);
         }
         if let Some(path) = buf.get_mut(..n) {
-            path.reverse();
+            reverse(path);
         }
         Ok(n)
     }
