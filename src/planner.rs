@@ -523,7 +523,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // Candidates: nodes within e_max, cheapest first, joined to the agent past the map.
         let mut near = Near::new();
         self.fwd.nearby(agent, self.cfg.e_max, &mut near, meter);
-        let key = |id: NodeId| self.fwd.cost(id).extend(self.fwd.pos(id).dist(agent), false);
+        let key = |id: NodeId| {
+            self.fwd
+                .cost(id)
+                .extend(self.fwd.pos(id).dist(agent), false)
+        };
         sort_small_by(&mut near, |&a, &b| key(a).cmp(&key(b)));
         let grid = self.map.grid();
         let parent = near.iter().copied().find(|&id| {

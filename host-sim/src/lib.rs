@@ -24,3 +24,5 @@ pub mod metrics;
 pub mod run;
 #[cfg(feature = "sim")]
 pub mod sim;
+#[cfg(feature = "sim")]
+pub mod stress;

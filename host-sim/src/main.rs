@@ -13,6 +13,7 @@ use host_sim::diffusion::{Options, TableOptions};
 use host_sim::experiment::{self, ExperimentArgs, Goals};
 use host_sim::maps;
 use host_sim::run::{self, RunArgs};
+use host_sim::stress;
 
 #[derive(Parser)]
 #[command(
@@ -114,6 +115,30 @@ enum Command {
         #[arg(long, default_value_t = 100)]
         anytime_ms: u64,
         #[arg(long, default_value = "out/experiment")]
+        out: PathBuf,
+    },
+    /// Safety stress test: seeded runs on the built-in maps with obstacles dropped on the path,
+    /// between the agent and its waypoint, on the goal and around the agent, vanishing again,
+    /// and goals changed mid-run; every move is checked. Fails if any move is unsafe or any
+    /// run panics.
+    Stress {
+        /// Number of runs (cycling over maps, then planners; seeds consecutive).
+        #[arg(long, default_value_t = 1000)]
+        runs: u32,
+        /// Planner names (Table 1), comma-separated, or `all`.
+        #[arg(long, default_value = "Bi-AM-RRT*(E),Bi-AM-RRT*(D),AM-RRT*(E),RT-RRT*")]
+        planners: String,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Planning time per call, in milliseconds of the virtual clock.
+        #[arg(long, default_value_t = 5)]
+        t_exp_ms: u64,
+        /// Calls before a run is abandoned.
+        #[arg(long, default_value_t = 1500)]
+        max_calls: u32,
+        /// Output folder (stress.csv, summary.json).
+        #[arg(long, default_value = "out/stress")]
         out: PathBuf,
     },
     /// Bake a metric table from a map.
@@ -249,6 +274,63 @@ fn main() -> Result<()> {
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
             })
+        }
+        Command::Stress {
+            runs,
+            planners,
+            seed,
+            t_exp_ms,
+            max_calls,
+            out,
+        } => {
+            let t0 = Instant::now();
+            let (sum, rows) = stress::run(&stress::StressArgs {
+                runs,
+                planners: experiment::parse_planners(&planners)?,
+                seed,
+                t_exp: std::time::Duration::from_millis(t_exp_ms),
+                max_calls,
+            })?;
+            std::fs::create_dir_all(&out)?;
+            let mut w = csv::Writer::from_path(out.join("stress.csv"))?;
+            for r in &rows {
+                w.serialize(r)?;
+            }
+            w.flush()?;
+            std::fs::write(
+                out.join("summary.json"),
+                serde_json::to_string_pretty(&sum)?,
+            )?;
+            for r in rows.iter().filter(|r| !r.arrived) {
+                println!(
+                    "not arrived: {} {} seed {}: {}{}",
+                    r.map,
+                    r.planner,
+                    r.seed,
+                    r.reason,
+                    r.panic
+                        .as_deref()
+                        .map(|m| format!(" ({m})"))
+                        .unwrap_or_default()
+                );
+            }
+            println!(
+                "stress: {} runs, {} moves, {} unsafe moves, {} panics, {} arrived, {} obstacles, \
+                 {} goal changes ({:.1} s; rows in {})",
+                sum.runs,
+                sum.moves,
+                sum.unsafe_moves,
+                sum.panics,
+                sum.arrived,
+                sum.obstacles,
+                sum.goal_changes,
+                t0.elapsed().as_secs_f64(),
+                out.join("stress.csv").display()
+            );
+            if sum.unsafe_moves > 0 || sum.panics > 0 {
+                bail!("the safety promise was broken");
+            }
+            Ok(())
         }
         Command::Bake {
             map,

@@ -280,3 +280,24 @@ fn regression_bad_scenarios_and_maps_are_refused_with_a_reason() {
     let err = maps::load_png(&dir.path().join("huge.png")).unwrap_err();
     assert!(format!("{err:#}").contains("at most"), "{err:#}");
 }
+
+/// The stress test in small (issue 7): obstacles dropped where they hurt and goals changed
+/// mid-run never make the agent move unsafely or the planner panic. `host-sim stress` runs
+/// 1,000 of these.
+#[test]
+fn stress_runs_are_safe() {
+    let (sum, rows) = host_sim::stress::run(&host_sim::stress::StressArgs {
+        runs: 6,
+        planners: vec![
+            bi_am_rrt::Config::bi_am_rrt(bi_am_rrt::MetricKind::Euclidean),
+            bi_am_rrt::Config::rt_rrt(bi_am_rrt::MetricKind::Euclidean),
+        ],
+        seed: 11,
+        t_exp: std::time::Duration::from_millis(3),
+        max_calls: 1500,
+    })
+    .unwrap();
+    assert_eq!(sum.runs, 6);
+    assert!(sum.moves > 100 && sum.obstacles > 20, "{sum:?}");
+    assert_eq!((sum.unsafe_moves, sum.panics), (0, 0), "{rows:#?}");
+}
