@@ -2,6 +2,7 @@
 //! operation against a plain model (a parent vector) and the tree's own invariant check:
 //! no cycle, parent/child links agree, every node reaches the root, cached costs equal costs
 //! recomputed along the model's paths, re-rooting keeps the node set and the undirected edges,
+//! removing a leaf moves the last node into its slot with every link renamed,
 //! and failed operations (full arena, cycles, unknown ids) change nothing.
 
 use std::collections::BTreeSet;
@@ -41,6 +42,9 @@ enum Op {
         x: f32,
         y: f32,
     },
+    RemoveLeaf {
+        node: usize,
+    },
     UnknownId,
 }
 
@@ -55,6 +59,7 @@ fn op() -> impl Strategy<Value = Op> {
         2 => (any::<usize>(), any::<bool>()).prop_map(|(node, blocked)| Op::SetEdgeBlocked { node, blocked }),
         1 => coord.clone().prop_map(|x| Op::Reflag { x }),
         1 => (coord.clone(), coord).prop_map(|(x, y)| Op::Reset { x, y }),
+        3 => any::<usize>().prop_map(|node| Op::RemoveLeaf { node }),
         1 => Just(Op::UnknownId),
     ]
 }
@@ -216,6 +221,38 @@ proptest! {
                 Op::Reset { x, y } => {
                     prop_assert_eq!(tree.reset(Point::new(x, y)), NodeId(0));
                     m = Model { pos: vec![Point::new(x, y)], parent: vec![None], blocked: vec![false], root: 0 };
+                }
+                Op::RemoveLeaf { node } => {
+                    let v = node % n;
+                    let leaf = v != m.root && !m.parent.contains(&Some(v));
+                    let before = tree.clone();
+                    let r = tree.remove_leaf(NodeId(v as u16));
+                    if !leaf {
+                        prop_assert_eq!(r, Err(TreeError::NotALeaf));
+                        prop_assert_eq!(tree.positions(), before.positions());
+                    } else {
+                        // Model: the last node moves into the freed slot.
+                        let last = n - 1;
+                        if v != last {
+                            prop_assert_eq!(r, Ok(Some((NodeId(last as u16), NodeId(v as u16)))));
+                            m.pos[v] = m.pos[last];
+                            m.parent[v] = m.parent[last];
+                            m.blocked[v] = m.blocked[last];
+                            for p in m.parent.iter_mut() {
+                                if *p == Some(last) {
+                                    *p = Some(v);
+                                }
+                            }
+                            if m.root == last {
+                                m.root = v;
+                            }
+                        } else {
+                            prop_assert_eq!(r, Ok(None));
+                        }
+                        m.pos.pop();
+                        m.parent.pop();
+                        m.blocked.pop();
+                    }
                 }
                 Op::UnknownId => {
                     let bad = NodeId(n as u16);

@@ -11,6 +11,8 @@
 
 #[cfg(feature = "sim")]
 pub mod bake;
+#[cfg(feature = "sim")]
+pub mod bounds;
 pub mod clock;
 #[cfg(feature = "sim")]
 pub mod diffusion;

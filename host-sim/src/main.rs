@@ -141,6 +141,22 @@ enum Command {
         #[arg(long, default_value = "out/stress")]
         out: PathBuf,
     },
+    /// Work per `plan` call with a clock that never advances (only the work cap ends a call):
+    /// 2,048 and 8,192 nodes, both rewiring modes, on the first leg of each scenario.
+    Frozen {
+        /// Scenario file (e.g. ../shared/maps/scenarios.toml); the built-in maps without it.
+        #[arg(long)]
+        scenarios: Option<PathBuf>,
+        /// Scenario names in --scenarios (comma-separated; all by default).
+        #[arg(long, value_delimiter = ',')]
+        maps: Option<Vec<String>>,
+        /// Planner name (Table 1).
+        #[arg(long, default_value = "Bi-AM-RRT*(D)")]
+        planner: String,
+        /// Calls per configuration.
+        #[arg(long, default_value_t = 10)]
+        calls: u32,
+    },
     /// Bake a metric table from a map.
     Bake {
         /// PNG map (mean-threshold rule), or `builtin:NAME`.
@@ -329,6 +345,44 @@ fn main() -> Result<()> {
             );
             if sum.unsafe_moves > 0 || sum.panics > 0 {
                 bail!("the safety promise was broken");
+            }
+            Ok(())
+        }
+        Command::Frozen {
+            scenarios,
+            maps: names,
+            planner,
+            calls,
+        } => {
+            let scs = match scenarios {
+                Some(file) => maps::load_scenarios(&file, names.as_deref())?,
+                None => maps::builtin_scenarios(),
+            };
+            let base = experiment::parse_planners(&planner)?
+                .first()
+                .copied()
+                .context("no planner")?;
+            println!(
+                "map, planner, nodes, mode, calls, max units, median units, max CPU ms, median CPU ms, max expansions, cap"
+            );
+            for sc in scs {
+                let prep = host_sim::sim::Prepared::new(sc);
+                for r in host_sim::bounds::frozen(&prep, base, calls)? {
+                    println!(
+                        "{}, {}, {}, {}, {}, {}, {}, {:.1}, {:.1}, {}, {}",
+                        r.map,
+                        r.planner,
+                        r.nodes,
+                        r.mode,
+                        r.calls,
+                        r.max_units,
+                        r.median_units,
+                        r.max_cpu_ms,
+                        r.median_cpu_ms,
+                        r.max_expansions,
+                        r.cap
+                    );
+                }
             }
             Ok(())
         }

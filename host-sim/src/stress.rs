@@ -203,21 +203,6 @@ fn one(prep: &Prepared, base: Config, seed: u64, args: &StressArgs) -> Result<St
                 .map_err(|e| anyhow::anyhow!("plan at {agent:?}: {e}"))?;
             row.calls = call + 1;
             last = Some(pr.status);
-            if std::env::var("STRESS_TRACE")
-                .ok()
-                .and_then(|v| v.parse::<u64>().ok())
-                == Some(seed)
-                && call % 20 == 0
-            {
-                eprintln!(
-                    "{call}: agent {agent:?} {:?} wp {:?} nodes {} live {} goal {goal:?} in {}",
-                    pr.status,
-                    pr.waypoint,
-                    pr.nodes,
-                    live.len(),
-                    pr.goal_in_tree
-                );
-            }
             let step = agent.step_towards(pr.waypoint, 1.0);
             if step != agent {
                 row.moves += 1;
