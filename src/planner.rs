@@ -18,6 +18,16 @@
 //! returned. (The agent must also see that node over a free segment; otherwise it first
 //! finishes its way to the root, so it never cuts a corner.)
 //!
+//! # The waypoint rule (safety)
+//!
+//! Before planning, a call checks that the agent can reach the root over a segment free of the
+//! map and of every circle. When it cannot (a circle dropped between them, or an agent that is
+//! not where the tree thinks) the agent's position becomes the root: a node there joins the
+//! tree below the cheapest node it sees past the map within `e_max` (the edge flagged blocked
+//! when a circle crosses it), or the forward tree restarts at the agent when no node is in
+//! sight. After planning, the waypoint is checked once more: the agent's own position is
+//! returned instead when the root is not reachable, and [`Status`] says why the agent holds.
+//!
 //! # Meet and graft
 //!
 //! Every node added to either tree is checked against the other tree: among the nodes within

@@ -14,8 +14,17 @@
 //!   implementation does not pay milliseconds per sample); AM-RRT*(E) steps towards the first
 //!   obstacle and stops short of it (bisection of the free prefix); RT-RRT* gives up.
 //! - The node is added when the neighbourhood holds fewer than `n_max` nodes, or the sample was
-//!   farther than `e_max` from its nearest node, or the new state is the goal. The goal joins as a
-//!   child of a new node within `e_max` of it over a free segment.
+//!   farther than `e_max` from its nearest node, or the new state is the goal.
+//! - The goal joins below the cheapest node within `e_max` that sees it over a free segment,
+//!   tried whenever a new node lands within `e_max` of it *and* whenever an expansion adds no
+//!   node (a duplicate sample, a dense neighbourhood), so neither the duplicate test nor the
+//!   density rule can keep a reachable goal out; a node already standing on the goal (within
+//!   1e-4 of a cell) becomes the goal's node.
+//! - A full arena makes room while the tree's goal is not joined, or joined only over a path
+//!   that crosses a dynamic obstacle: one leaf is recycled (among 16 random nodes, the leaf with
+//!   the highest `Cost(x) + d_E(x, goal)`, never the root, the goal or the new node's parent)
+//!   and the new node takes its slot. Once a free path exists, a full tree rewires what it has
+//!   (the paper's behaviour).
 
 use crate::clock::{Clock, Meter};
 use crate::config::{Base, Config};
