@@ -88,7 +88,9 @@ pub enum SetupError {
     Config(ConfigError),
     /// The start position is refused.
     Start(InputError),
-    /// The map is too large for the spatial index to cover (its size overflows `f32`).
+    /// The map's scale is out of range: squared distances across it overflow `f32` (maps over
+    /// about 1e19 m), or vanish at the duplicate scale (cells under about 1e-15 m), or the
+    /// spatial index cannot cover it.
     Map,
 }
 
@@ -97,7 +99,9 @@ impl core::fmt::Display for SetupError {
         match self {
             Self::Config(e) => write!(f, "bad configuration: {e}"),
             Self::Start(e) => write!(f, "bad start: {e}"),
-            Self::Map => f.write_str("map too large for the spatial index"),
+            Self::Map => {
+                f.write_str("map scale out of range: squared distances overflow or vanish in f32")
+            }
         }
     }
 }

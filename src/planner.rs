@@ -93,8 +93,8 @@ pub enum Status {
     /// for the reason given. Nothing is lost: the tree keeps growing and rewiring, and the
     /// agent goes on once the way is free.
     Waiting(Wait),
-    /// The assisting metric places the goal at an infinite distance from the agent: no path
-    /// can be found from here (the agent holds).
+    /// The assisting metric places the goal at an infinite distance from the agent (a region
+    /// its table cuts off): the tree keeps growing, but the metric cannot guide it there.
     Unreachable,
 }
 
@@ -530,13 +530,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             self.fwd.restart_sweeps();
             return;
         }
-        // Candidates: nodes within e_max, cheapest first, joined to the agent past the map.
+        // Candidates: nodes within e_max, cheapest first (edges crossing a circle last), joined
+        // to the agent past the map.
         let mut near = Near::new();
         self.fwd.nearby(agent, self.cfg.e_max, &mut near, meter);
+        let circles = self.map.obstacles();
+        let crosses = |id: NodeId| circles.blocks_segment(self.fwd.pos(id), agent);
         let key = |id: NodeId| {
             self.fwd
                 .cost(id)
-                .extend(self.fwd.pos(id).dist(agent), false)
+                .extend(self.fwd.pos(id).dist(agent), crosses(id))
         };
         sort_small_by(&mut near, |&a, &b| key(a).cmp(&key(b)));
         let grid = self.map.grid();
@@ -544,6 +547,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             meter.charge(4);
             grid.segment_free(self.fwd.pos(id), agent)
         });
+        let goal = self.goal.map_or(agent, |g| g.pos);
         let anchored = parent.is_some_and(|parent| {
             let blocked = self
                 .map
@@ -552,7 +556,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             let mut keep = [parent, self.goal_node().unwrap_or(parent)];
             if self.fwd.tree.is_full() {
                 self.full = true;
-                if !self.fwd.recycle(&mut self.rng, agent, &mut keep, meter) {
+                if !self.fwd.recycle(&mut self.rng, goal, &mut keep, meter) {
                     return false;
                 }
                 self.rename_goal(keep[1]);
