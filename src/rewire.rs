@@ -34,7 +34,7 @@ use crate::clock::{Clock, Deadline, Meter};
 use crate::geometry::{Ellipse, Point};
 use crate::metric::Metric;
 use crate::search::{Env, Near, Target, TreeStore};
-use crate::slots::sort_small_by;
+use crate::slots::{sort_small_by, units};
 use crate::tree::NodeId;
 
 /// Limits of one rewiring call.
@@ -64,8 +64,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         if new >= self.cost(child) || !env.free(pp, pc, meter) {
             return false;
         }
-        meter.charge(4);
-        self.tree.set_parent(child, parent, false).is_ok()
+        // The edge change refreshes the moved subtree's costs: charge its size too.
+        match self.tree.set_parent(child, parent, false) {
+            Ok(moved) => {
+                meter.charge(units(moved).saturating_add(4));
+                true
+            }
+            Err(_) => false,
+        }
     }
 
     /// Root rewiring, both kinds (module docs). `second_kind` enables Algorithm 4.
