@@ -419,7 +419,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// parent candidates), each `2 + 2 e_max / cell` units at most; a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). Measured
     /// (`host-sim frozen`, Bi-AM-RRT*(D) on the reference maps, N = 8192): calls ended within
-    /// 16,428 units of the cap. One unit is about 12 ns on the development machine and about
+    /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about
     /// 200 instructions on a Cortex-M4F.
     ///
     /// Errors (doing nothing) when `agent` is not finite, outside the map or inside the
