@@ -7,6 +7,7 @@ use host_sim::maps;
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     let _ = maps::decode_png(data, "fuzz");
     if let Ok(text) = std::str::from_utf8(data) {
-        let _ = maps::scenarios_from_str(text, |_| maps::builtin_by_name("maze").map(|s| s.map), None);
+        let _ =
+            maps::scenarios_from_str(text, |_| maps::builtin_by_name("maze").map(|s| s.map), None);
     }
 });

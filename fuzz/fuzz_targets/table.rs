@@ -34,7 +34,10 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
         if let Ok(t) = DiffusionTable::new(&fixed) {
             let (a, b) = (probe(8), probe(16));
             let (d, e) = (t.distance(a, b), t.distance(b, a));
-            assert!(d.to_bits() == e.to_bits() || (d.is_nan() && e.is_nan()), "symmetric");
+            assert!(
+                d.to_bits() == e.to_bits() || (d.is_nan() && e.is_nan()),
+                "symmetric"
+            );
         }
     }
     // The grid constructor and its queries.
@@ -57,7 +60,9 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
         });
     }
     // The spatial index with arbitrary bounds and points.
-    if let Some(mut idx) = SpatialIndex::<16, 8>::with_bounds(f32_at(data, 0), f32_at(data, 4), f32_at(data, 8)) {
+    if let Some(mut idx) =
+        SpatialIndex::<16, 8>::with_bounds(f32_at(data, 0), f32_at(data, 4), f32_at(data, 8))
+    {
         let pts: Vec<Point> = (0..16).map(|i| probe(12 + 8 * i)).collect();
         let mut kept = Vec::new();
         for (i, p) in pts.iter().enumerate() {

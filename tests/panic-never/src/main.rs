@@ -45,11 +45,14 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     let cfg = black_box(Config::table1()[black_box(7usize) % 20]);
     let _ = black_box(cfg.validate());
     let rng = XorShiftRng::seed_from_u64(black_box(1));
-    let Ok(mut p) = Planner::<_, _, N, B, 4>::new(storage, Map::new(grid), metric, rng, cfg, point())
+    let Ok(mut p) =
+        Planner::<_, _, N, B, 4>::new(storage, Map::new(grid), metric, rng, cfg, point())
     else {
         return 0;
     };
-    let clock = FakeClock::nanos().with_work_cost(black_box(12)).with_step(black_box(1));
+    let clock = FakeClock::nanos()
+        .with_work_cost(black_box(12))
+        .with_step(black_box(1));
     let _ = p.set_goal(point());
     let _ = p.plan(&clock, point());
     let _ = p.grow(&clock);
@@ -59,7 +62,13 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
         let _ = p.plan(&clock, point());
         let _ = p.remove_obstacle(id);
     }
-    let _ = run_to_goal(&mut p, &clock, point(), &black_box(Protocol::default()), |_, _, _| {});
+    let _ = run_to_goal(
+        &mut p,
+        &clock,
+        point(),
+        &black_box(Protocol::default()),
+        |_, _, _| {},
+    );
     p.clear_goal();
     black_box(p.tree().len() as u32) ^ black_box(p.stats().expansions as u32)
 }
@@ -69,7 +78,12 @@ fn main() -> ! {
     // Grid and its queries.
     let mut bits = [0u8; 64];
     let _ = pack_grid(&mut bits, black_box(20), black_box(20), |c, r| c == r);
-    let grid = OccupancyGrid::new(black_box(&bits), black_box(20), black_box(20), black_box(1.0));
+    let grid = OccupancyGrid::new(
+        black_box(&bits),
+        black_box(20),
+        black_box(20),
+        black_box(1.0),
+    );
     let mut sink = 0u32;
     if let Ok(g) = grid {
         sink ^= g.segment_free(point(), point()) as u32;
@@ -110,7 +124,9 @@ fn main() -> ! {
         let _ = black_box(tree.path_ids(a, &mut path));
         sink ^= tree.validate().is_ok() as u32;
     }
-    if let Some(mut idx) = SpatialIndex::<16, 4>::with_bounds(black_box(10.0), black_box(1e20), black_box(0.5)) {
+    if let Some(mut idx) =
+        SpatialIndex::<16, 4>::with_bounds(black_box(10.0), black_box(1e20), black_box(0.5))
+    {
         let pts = [point(); 16];
         let _ = idx.insert(NodeId(black_box(3)), point());
         sink ^= idx.nearest(point(), &pts).map_or(0, |(id, _)| id.0 as u32);
