@@ -207,8 +207,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let (w, h) = (map.grid().width_m(), map.grid().height_m());
         // Squared distances must neither overflow across the map nor underflow at the
         // duplicate scale (1e-4 cell): cells from about 1e-15 m, maps up to about 1e19 m.
-        let dup = crate::search::DUPLICATE * map.grid().cell_size();
-        if !(w * w + h * h).is_finite() || dup * dup < f32::MIN_POSITIVE {
+        let dup_sq = crate::search::duplicate_sq(map.grid().cell_size());
+        if !(w * w + h * h).is_finite() || dup_sq < f32::MIN_POSITIVE {
             return Err(SetupError::Map);
         }
         map.check_point(start)?;
@@ -521,14 +521,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if agent == root || self.map.free_path(agent, root) {
             return;
         }
-        let env = Env {
-            map: &self.map,
-            metric: &self.metric,
-            cfg: &self.cfg,
-        };
         // The agent stands on a node: that node becomes the root.
         if let Some((q, d2)) = self.fwd.index.nearest(agent, self.fwd.tree.positions())
-            && d2 < env.duplicate_sq()
+            && d2 < crate::search::duplicate_sq(self.map.grid().cell_size())
             && self.fwd.tree.set_root(q).is_ok()
         {
             meter.charge(units(N / 8));

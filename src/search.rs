@@ -49,6 +49,22 @@ pub(crate) type Near = heapless::Vec<NodeId, NEAR_CAP>;
 /// is dropped, and a goal there joins as that node.
 pub(crate) const DUPLICATE: f32 = 1e-4;
 
+/// Squared distance under which two states on a grid of `cell`-metre cells are the same.
+pub(crate) fn duplicate_sq(cell: f32) -> f32 {
+    let d = DUPLICATE * cell;
+    d * d
+}
+
+/// Adds `id` to a candidate list, dropping the last candidate when the list is full.
+fn keep_candidate(near: &mut Near, id: NodeId) {
+    if !near.contains(&id) {
+        if near.is_full() {
+            near.pop();
+        }
+        let _ = near.push(id);
+    }
+}
+
 /// Storage of one tree: the arena of `N` nodes, a spatial index of up to `B` buckets and the
 /// resumable state of its rewiring sweeps. Two of these (forward and reverse tree) make a
 /// [`crate::planner::Storage`].
@@ -177,8 +193,7 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
 
     /// Squared distance under which two states are the same ([`DUPLICATE`] of a cell).
     pub fn duplicate_sq(&self) -> f32 {
-        let d = DUPLICATE * self.map.grid().cell_size();
-        d * d
+        duplicate_sq(self.map.grid().cell_size())
     }
 
     /// `d_A`, charged (2 units plus what the metric reports).
@@ -334,10 +349,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         &mut self,
         env: &Env<'_, '_, M, K>,
         rng: &mut R,
-        target: Option<&mut Target>,
+        mut target: Option<&mut Target>,
         meter: &Meter<'_, C>,
     ) -> Grown {
-        let mut target = target;
         let mut grown = Grown::default();
         let added = self.add_sample(env, rng, target.as_deref_mut(), meter, &mut grown.full);
         grown.added = added.map(|(id, _)| id);
@@ -385,12 +399,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
         let mut near = Near::new();
         self.nearby(goal, e_max, &mut near, meter);
-        if !near.contains(&q) {
-            if near.is_full() {
-                near.pop();
-            }
-            let _ = near.push(q);
-        }
+        keep_candidate(&mut near, q);
         let parent = self.best_parent(env, goal, &mut near, meter)?;
         self.insert_making_room(rng, goal, parent, Some(target), meter, full)
     }
@@ -437,13 +446,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
             return None;
         }
-        if !near.contains(&x_nearest) {
-            // Keep x_nearest a candidate even when the list was truncated.
-            if near.is_full() {
-                near.pop();
-            }
-            let _ = near.push(x_nearest);
-        }
+        // Keep x_nearest a candidate even when the list was truncated.
+        keep_candidate(&mut near, x_nearest);
         let parent = self.best_parent(env, x_new, &mut near, meter)?;
         let id = self.insert_making_room(rng, x_new, parent, target, meter, full)?;
         if cfg.base == Base::RtRrt {
@@ -457,7 +461,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// room: one not joined yet (promise: a goal that can be reached joins) or joined over a
     /// path that crosses a dynamic obstacle (the tree must grow a way around). Once a free
     /// path exists, a full tree rewires what it has. Sets `full` when the arena was full.
-    pub(crate) fn insert_making_room<R: Rng + ?Sized, C: Clock + ?Sized>(
+    fn insert_making_room<R: Rng + ?Sized, C: Clock + ?Sized>(
         &mut self,
         rng: &mut R,
         pos: Point,

@@ -104,14 +104,14 @@ pub fn run(args: &StressArgs) -> Result<(StressSummary, Vec<StressRun>)> {
             let outcome = catch_unwind(AssertUnwindSafe(|| one(prep, cfg, seed, args)));
             match outcome {
                 Ok(Ok(row)) => row,
-                Ok(Err(e)) => failed(prep, cfg, seed, format!("error: {e:#}")),
+                Ok(Err(e)) => row_for(prep, cfg, seed, format!("error: {e:#}")),
                 Err(p) => {
                     let msg = p
                         .downcast_ref::<String>()
                         .cloned()
                         .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
                         .unwrap_or_else(|| "panic".into());
-                    let mut row = failed(prep, cfg, seed, "panic".into());
+                    let mut row = row_for(prep, cfg, seed, "panic".into());
                     row.panic = Some(msg);
                     row
                 }
@@ -131,7 +131,8 @@ pub fn run(args: &StressArgs) -> Result<(StressSummary, Vec<StressRun>)> {
     Ok((sum, rows))
 }
 
-fn failed(prep: &Prepared, cfg: Config, seed: u64, reason: String) -> StressRun {
+/// An empty row for a run (the failure reason, if any, given).
+fn row_for(prep: &Prepared, cfg: Config, seed: u64, reason: String) -> StressRun {
     StressRun {
         map: prep.scenario.name.clone(),
         planner: cfg.name().to_string(),
@@ -159,7 +160,7 @@ fn free_point(p: &crate::sim::SimPlanner<'_, '_>, rng: &mut XorShiftRng) -> Opti
 fn one(prep: &Prepared, base: Config, seed: u64, args: &StressArgs) -> Result<StressRun> {
     let mut cfg = base;
     cfg.t_exp = args.t_exp;
-    let mut row = failed(prep, base, seed, String::new());
+    let mut row = row_for(prep, base, seed, String::new());
     with_planner(prep, cfg, seed, |p| {
         let clock = FakeClock::nanos().with_work_cost(VIRTUAL_NS_PER_UNIT);
         let mut rng = XorShiftRng::seed_from_u64(seed ^ 0x5eed);
