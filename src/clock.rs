@@ -80,6 +80,12 @@ pub struct Deadline {
 }
 
 impl Deadline {
+    /// A deadline that never passes (work that must finish, such as reading the path).
+    pub const NEVER: Deadline = Deadline {
+        start: 0,
+        end: u64::MAX,
+    };
+
     /// The deadline `budget` from now on `clock`.
     pub fn after<C: Clock + ?Sized>(clock: &C, budget: Duration) -> Self {
         let start = clock.now();
@@ -206,6 +212,23 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
 impl<C: Clock + ?Sized> Drop for Meter<'_, C> {
     fn drop(&mut self) {
         self.flush();
+    }
+}
+
+/// A [`Clock`] on `embassy_time::Instant` (feature `embassy-time`): for firmware built on
+/// Embassy, whose time driver (a hardware timer the application configures) it reads.
+#[cfg(feature = "embassy-time")]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmbassyClock;
+
+#[cfg(feature = "embassy-time")]
+impl Clock for EmbassyClock {
+    fn now(&self) -> u64 {
+        embassy_time::Instant::now().as_ticks()
+    }
+
+    fn ticks_per_second(&self) -> u64 {
+        embassy_time::TICK_HZ
     }
 }
 

@@ -2,7 +2,9 @@
 //! `Nearest` and `Nearby`) whose cost grows with the neighbourhood, not with the tree.
 //!
 //! A fixed grid of at most `B` square buckets covers the map; each bucket keeps an intrusive
-//! doubly linked list of node ids (arrays of capacity `N`, nothing allocated). A within-radius
+//! singly linked list of node ids: one `u16` per node (its successor, which also says whether
+//! it is indexed) and one per bucket, nothing allocated, and all zero when empty. A node's
+//! bucket follows from its position, so removal takes the position and walks that bucket. A within-radius
 //! query visits only the buckets that overlap the query disc's bounding box. A nearest query
 //! visits square rings of buckets outward from the query's bucket and stops as soon as the ring
 //! still to come cannot hold anything closer than the best found. With buckets about the size
@@ -17,19 +19,25 @@ use core::ops::ControlFlow;
 
 use crate::error::IndexError;
 use crate::geometry::Point;
-use crate::slots::{cell_index, rd, sat_u32, to_u16, wr};
+use crate::slots::{cell_index, rd, rd_link, sat_u32, to_u16, wr, wr_link};
 use crate::tree::NodeId;
 
 const NONE: u16 = u16::MAX;
+/// `next` slot of a node that is not indexed (the all-zero state).
+const OUT: u16 = 0;
+/// `next` slot of an indexed node that ends its bucket's list; otherwise the slot holds the
+/// successor's id + 1 (ids are below `u16::MAX - 1`).
+const END: u16 = u16::MAX;
 
 /// A bucket grid over `[0, width] x [0, height]` indexing up to `N` nodes in at most `B`
 /// buckets.
 #[derive(Clone, Debug)]
 pub struct SpatialIndex<const N: usize, const B: usize> {
+    /// First node of each bucket, as a link (`id + 1`, 0 for none).
     head: [u16; B],
+    /// Per node: [`OUT`], [`END`] or the successor's id + 1.
     next: [u16; N],
-    prev: [u16; N],
-    bucket_of: [u16; N],
+    /// Bucket columns and rows (0 x 0 until shaped: then one bucket covers everything).
     cols: u16,
     rows: u16,
     side: f32,
@@ -45,22 +53,20 @@ impl<const N: usize, const B: usize> Default for SpatialIndex<N, B> {
 
 impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     const SIZES_FIT: () = assert!(
-        N > 0 && N < NONE as usize && B > 0 && B < NONE as usize,
+        N > 0 && N < END as usize - 1 && B > 0 && B < NONE as usize,
         "SpatialIndex capacities must be 1..65535"
     );
 
     /// An empty index with a single bucket (give it a shape with [`SpatialIndex::reshape`]).
-    /// A `const fn`, so an index can live in a `static`.
+    /// A `const fn` whose value is all zero bytes, so an index in a `static` lands in `.bss`.
     pub const fn new() -> Self {
         let () = Self::SIZES_FIT;
         Self {
-            head: [NONE; B],
-            next: [NONE; N],
-            prev: [NONE; N],
-            bucket_of: [NONE; N],
-            cols: 1,
-            rows: 1,
-            side: f32::MAX,
+            head: [0; B],
+            next: [OUT; N],
+            cols: 0,
+            rows: 0,
+            side: 0.0,
             inv_side: 0.0,
             len: 0,
         }
@@ -125,7 +131,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
 
     /// Buckets per row and per column.
     pub fn shape(&self) -> (u16, u16) {
-        (self.cols, self.rows)
+        (self.cols.max(1), self.rows.max(1))
     }
 
     /// Number of indexed nodes.
@@ -140,14 +146,20 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
 
     /// Whether `id` is indexed.
     pub fn contains(&self, id: NodeId) -> bool {
-        self.bucket_of.get(id.index()).is_some_and(|&b| b != NONE)
+        self.next.get(id.index()).is_some_and(|&n| n != OUT)
     }
 
     /// Removes every node: O(N + B).
     pub fn clear(&mut self) {
-        self.head.fill(NONE);
-        self.bucket_of.fill(NONE);
+        self.head.fill(0);
+        self.next.fill(OUT);
         self.len = 0;
+    }
+
+    /// The bucket of position `p`.
+    fn bucket(&self, p: Point) -> usize {
+        let (c, r) = self.bucket_coords(p);
+        cell_index(c, r, self.shape().0)
     }
 
     /// Indexes node `id` at position `p`. Positions outside the map go to the nearest border
@@ -160,42 +172,59 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         if !p.is_finite() {
             return Err(IndexError::NotFinite);
         }
-        if rd(&self.bucket_of, i, NONE) != NONE {
+        if self.contains(id) {
             return Err(IndexError::Membership);
         }
-        let (c, r) = self.bucket_coords(p);
-        let b = cell_index(c, r, self.cols);
-        let first = rd(&self.head, b, NONE);
-        wr(&mut self.next, i, first);
-        wr(&mut self.prev, i, NONE);
-        if first != NONE {
-            wr(&mut self.prev, first as usize, id.0);
-        }
-        wr(&mut self.head, b, id.0);
-        wr(&mut self.bucket_of, i, to_u16(b));
+        let b = self.bucket(p);
+        let first = rd_link(&self.head, b);
+        wr(&mut self.next, i, if first == NONE { END } else { first.wrapping_add(1) });
+        wr_link(&mut self.head, b, id.0);
         self.len = self.len.saturating_add(1);
         Ok(())
     }
 
-    /// Removes node `id`: O(1).
-    pub fn remove(&mut self, id: NodeId) -> Result<(), IndexError> {
+    /// Removes node `id`, indexed at position `p`: O(nodes in its bucket).
+    pub fn remove(&mut self, id: NodeId, p: Point) -> Result<(), IndexError> {
         let i = id.index();
-        let b = *self.bucket_of.get(i).ok_or(IndexError::IdOutOfRange)?;
-        if b == NONE {
+        if i >= N {
+            return Err(IndexError::IdOutOfRange);
+        }
+        if !self.contains(id) || !p.is_finite() {
             return Err(IndexError::Membership);
         }
-        let (prev, next) = (rd(&self.prev, i, NONE), rd(&self.next, i, NONE));
+        let b = self.bucket(p);
+        let after = self.successor(id.0);
+        // Find the link that points at `id`: the bucket head or a predecessor's `next`.
+        let mut prev = NONE;
+        let mut v = rd_link(&self.head, b);
+        for _ in 0..N {
+            if v == id.0 || v == NONE {
+                break;
+            }
+            prev = v;
+            v = self.successor(v);
+        }
+        if v != id.0 {
+            // Not in the bucket of `p`: indexed at another position.
+            return Err(IndexError::Membership);
+        }
         if prev == NONE {
-            wr(&mut self.head, b as usize, next);
+            wr_link(&mut self.head, b, after);
         } else {
-            wr(&mut self.next, prev as usize, next);
+            wr(&mut self.next, prev as usize, if after == NONE { END } else { after.wrapping_add(1) });
         }
-        if next != NONE {
-            wr(&mut self.prev, next as usize, prev);
-        }
-        wr(&mut self.bucket_of, i, NONE);
+        wr(&mut self.next, i, OUT);
         self.len = self.len.saturating_sub(1);
         Ok(())
+    }
+
+    /// The node after `v` in its bucket, `NONE` at the end (or for a node not indexed).
+    #[inline]
+    fn successor(&self, v: u16) -> u16 {
+        match rd(&self.next, v as usize, OUT) {
+            OUT | END => NONE,
+            n => n.wrapping_sub(1),
+        }
     }
 
     /// The indexed node nearest to `q` (Euclidean) with its squared distance.
@@ -219,14 +248,15 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         }
         let (qc, qr) = self.bucket_coords(q);
         let (qc, qr) = (qc as i32, qr as i32);
+        let (cols, rows) = self.shape();
         // Distances to every indexed point are at least the distances from q's projection onto
         // the grid rectangle (points lie in it and projection onto a convex set does not
         // increase distances), so ring bounds are computed from the projection.
         let qp = Point::new(
-            q.x.max(0.0).min(self.cols as f32 * self.side),
-            q.y.max(0.0).min(self.rows as f32 * self.side),
+            q.x.max(0.0).min(cols as f32 * self.side),
+            q.y.max(0.0).min(rows as f32 * self.side),
         );
-        let max_ring = (qc.max(self.cols as i32 - 1 - qc)).max(qr.max(self.rows as i32 - 1 - qr));
+        let max_ring = (qc.max(cols as i32 - 1 - qc)).max(qr.max(rows as i32 - 1 - qr));
         let mut best: Option<(NodeId, f32)> = None;
         for k in 0..=max_ring {
             if let Some((_, d2)) = best {
@@ -279,7 +309,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         let (c1, r1) = self.bucket_coords(Point::new(q.x + radius, q.y + radius));
         for row in r0..=r1 {
             for col in c0..=c1 {
-                let b = cell_index(col, row, self.cols);
+                let b = cell_index(col, row, self.shape().0);
                 self.for_each_in_bucket(b, |id| match positions.get(id.index()) {
                     Some(p) => {
                         let d2 = p.dist_sq(q);
@@ -317,8 +347,9 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
 
     fn bucket_coords(&self, p: Point) -> (u16, u16) {
         // Saturating float-to-int casts map NaN and negatives to 0; clamp the far side.
-        let c = to_u16(sat_u32(p.x * self.inv_side).min(u32::from(self.cols).saturating_sub(1)));
-        let r = to_u16(sat_u32(p.y * self.inv_side).min(u32::from(self.rows).saturating_sub(1)));
+        let (cols, rows) = self.shape();
+        let c = to_u16(sat_u32(p.x * self.inv_side).min(u32::from(cols).saturating_sub(1)));
+        let r = to_u16(sat_u32(p.y * self.inv_side).min(u32::from(rows).saturating_sub(1)));
         (c, r)
     }
 
@@ -326,13 +357,13 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     where
         F: FnMut(NodeId) -> ControlFlow<()>,
     {
-        let mut v = self.head.get(b).copied().unwrap_or(NONE);
+        let mut v = rd_link(&self.head, b);
         for _ in 0..N {
             if v == NONE {
                 break;
             }
             f(NodeId(v))?;
-            v = rd(&self.next, v as usize, NONE);
+            v = self.successor(v);
         }
         ControlFlow::Continue(())
     }
@@ -343,7 +374,8 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     where
         F: FnMut(usize) -> ControlFlow<()>,
     {
-        let (cols, rows) = (self.cols as i32, self.rows as i32);
+        let (cols, rows) = self.shape();
+        let (cols, rows) = (cols as i32, rows as i32);
         let mut visit = |c: i32, r: i32| {
             if c >= 0 && r >= 0 && c < cols && r < rows {
                 f(usize::try_from(r * cols + c).unwrap_or(usize::MAX))
@@ -453,8 +485,9 @@ mod tests {
             idx.nearest(Point::new(8.0, 8.0), &pts).unwrap().0,
             NodeId(1)
         );
-        idx.remove(NodeId(1)).unwrap();
-        assert_eq!(idx.remove(NodeId(1)), Err(IndexError::Membership));
+        assert_eq!(idx.remove(NodeId(1), pts[0]), Err(IndexError::Membership));
+        idx.remove(NodeId(1), pts[1]).unwrap();
+        assert_eq!(idx.remove(NodeId(1), pts[1]), Err(IndexError::Membership));
         assert_eq!(
             idx.nearest(Point::new(8.0, 8.0), &pts).unwrap().0,
             NodeId(2)

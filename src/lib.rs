@@ -19,7 +19,8 @@
 //! - [`tree`]: the fixed-capacity tree arena with cached, blocked-aware path costs, edge
 //!   updates and re-rooting.
 //! - [`index`]: the bucket-grid spatial index for `Nearest` and `Nearby`.
-//! - [`clock`]: the caller's clock, deadlines for the time budgets, and a fake/virtual clock.
+//! - [`clock`]: the caller's clock, deadlines for the time budgets, and a fake/virtual clock;
+//!   `cortex` (feature `cortex-m`): SysTick and DWT clocks for the chip.
 //! - [`sweep`]: bounded queue, stack and seen-set for the rewiring sweeps.
 //! - [`error`]: the small error enums.
 //!
@@ -67,6 +68,20 @@
 //! ## Features
 //!
 //! - `defmt`: `defmt::Format` for the public types (for firmware logging).
+//! - `cortex-m`: the `cortex` module, real [`clock::Clock`]s on SysTick and on the DWT cycle
+//!   counter (Cortex-M3 and up).
+//! - `embassy-time`: [`clock::EmbassyClock`], a [`clock::Clock`] on `embassy_time::Instant`
+//!   for firmware built on Embassy (the application provides the time driver).
+//!
+//! ## Randomness on the chip
+//!
+//! The planner takes any `rand_core::Rng` (`rand_core` 0.10, the trait behind `TryRng` with
+//! an infallible error). For repeatable runs use a seeded software generator such as
+//! `rand_xorshift::XorShiftRng::seed_from_u64`, as the examples do. To draw from a hardware
+//! generator, wrap the HAL's driver in a type implementing `rand_core::TryRng` (most HALs
+//! implement the older `rand_core` 0.6 `RngCore`; its `next_u32` maps straight onto
+//! `try_next_u32`), or, better for speed and repeatability, seed a software generator once
+//! from it: `XorShiftRng::from_seed(hw_bytes)`.
 
 #![no_std]
 #![forbid(unsafe_code)]
@@ -95,6 +110,8 @@ pub mod agent;
 pub mod builtin;
 pub mod clock;
 pub mod config;
+#[cfg(feature = "cortex-m")]
+pub mod cortex;
 pub mod error;
 pub mod geometry;
 pub mod index;

@@ -187,6 +187,8 @@ pub struct Planner<'s, 'm, M, R, const N: usize, const B: usize, const K: usize>
     rev_goal: Option<Target>,
     stats: Stats,
     full: bool,
+    /// The deadline of the current call (`t_exp`).
+    call: Deadline,
 }
 
 impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
@@ -232,6 +234,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             rev_goal: None,
             stats: Stats::default(),
             full: false,
+            call: Deadline::NEVER,
         })
     }
 
@@ -366,6 +369,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             map: &self.map,
             metric: &self.metric,
             cfg: &self.cfg,
+            call: Deadline::NEVER,
         };
         self.fwd.nearest(&env, goal.pos, meter)
     }
@@ -459,6 +463,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     fn expand_for<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) -> u32 {
         let call = Deadline::after(clock, self.cfg.t_exp);
+        self.call = call;
         let mut expansions = 0;
         self.full = false;
         while expansions < self.cfg.max_expansions_per_call && !meter.expired(&call) {
@@ -649,6 +654,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             map: &self.map,
             metric: &self.metric,
             cfg: &self.cfg,
+            call: self.call,
         };
         let grown = self
             .fwd
@@ -665,6 +671,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             map: &self.map,
             metric: &self.metric,
             cfg: &self.cfg,
+            call: self.call,
         };
         let slice = self.slice(meter, self.cfg.t_root, call);
         self.fwd
@@ -699,6 +706,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                     map: &self.map,
                     metric: &self.metric,
                     cfg: &self.cfg,
+                    call: self.call,
                 };
                 let slice = self.slice(meter, self.cfg.t_root, call);
                 self.rev
@@ -757,6 +765,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             map: &self.map,
             metric: &self.metric,
             cfg: &self.cfg,
+            call: self.call,
         };
         let Some(&(_, partner)) = best
             .iter()

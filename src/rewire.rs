@@ -35,7 +35,7 @@ use crate::geometry::{Ellipse, Point};
 use crate::metric::Metric;
 use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
-use crate::tree::NodeId;
+use crate::tree::{Mark, NodeId};
 
 /// Limits of one rewiring call.
 #[derive(Clone, Copy, Debug)]
@@ -92,8 +92,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 return;
             }
             if self.root_queue.is_empty() {
-                self.root_seen.clear();
-                self.root_seen.insert(root);
+                self.tree.clear_marks(Mark::Root);
+                self.tree.mark(root, Mark::Root);
                 let _ = self.root_queue.push_back(root);
             }
             let Some(x1) = self.root_queue.pop_front() else {
@@ -108,8 +108,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             for &x_near in near.iter() {
                 meter.charge(1);
                 self.try_rewire(env, x_near, x1, meter);
-                if self.root_seen.insert(x_near) {
-                    let _ = self.root_queue.push_back(x_near);
+                // Seen only once queued: a node refused by the full (bounded) queue can still
+                // be queued later in the sweep, from another neighbour.
+                if !self.tree.marked(x_near, Mark::Root) && self.root_queue.push_back(x_near).is_ok() {
+                    self.tree.mark(x_near, Mark::Root);
                 }
             }
         }
@@ -161,8 +163,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 return;
             }
             if self.goal_stack.is_empty() && self.goal_queue.is_empty() {
-                self.goal_seen.clear();
-                self.goal_seen.insert(root);
+                self.tree.clear_marks(Mark::Goal);
+                self.tree.mark(root, Mark::Goal);
                 let _ = self.goal_stack.push(root);
             }
             // The ellipse follows the goal's current cost (it shrinks as rewiring succeeds).
@@ -214,16 +216,22 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             for &(_, x_near) in keyed.iter() {
                 meter.charge(1);
                 self.try_rewire(env, parent, x_near, meter);
-                if !self.goal_seen.contains(x_near) && env.free(x1_pos, self.pos(x_near), meter) {
-                    self.goal_seen.insert(x_near);
-                    let _ = frontier.push(x_near);
+                if !self.tree.marked(x_near, Mark::Goal)
+                    && env.free(x1_pos, self.pos(x_near), meter)
+                    && frontier.push(x_near).is_ok()
+                {
+                    self.tree.mark(x_near, Mark::Goal);
                 }
             }
             for &f in frontier.iter() {
                 let _ = self.goal_stack.push(f);
             }
             for &f in frontier.iter().rev() {
-                let _ = self.goal_queue.push_front(f);
+                // Refused by the full (bounded) queue: unseen again, so a later visit can
+                // queue it (it may still be on the stack).
+                if self.goal_queue.push_front(f).is_err() {
+                    self.tree.unmark(f, Mark::Goal);
+                }
             }
             if let Some(&top) = self.goal_stack.last()
                 && env.metric(self.pos(top), goal.pos, meter) > d1

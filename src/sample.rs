@@ -82,3 +82,29 @@ pub(crate) fn sample_state<R: Rng + ?Sized, const K: usize>(
         None => uniform_free(rng, map, attempts),
     }
 }
+
+/// A `rand_core` 0.6 generator (what most HAL drivers of hardware random generators
+/// implement) as the `rand_core` 0.10 [`Rng`] the planner takes (feature `rand-core-06`):
+/// `Rng06(hal_rng)`. Hardware generators are slow and never repeat a run; seeding a software
+/// generator once from one (`XorShiftRng::from_seed`) is usually the better choice.
+#[cfg(feature = "rand-core-06")]
+#[derive(Debug)]
+pub struct Rng06<R>(pub R);
+
+#[cfg(feature = "rand-core-06")]
+impl<R: rand_core_06::RngCore> rand_core::TryRng for Rng06<R> {
+    type Error = core::convert::Infallible;
+
+    fn try_next_u32(&mut self) -> Result<u32, Self::Error> {
+        Ok(self.0.next_u32())
+    }
+
+    fn try_next_u64(&mut self) -> Result<u64, Self::Error> {
+        Ok(self.0.next_u64())
+    }
+
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Self::Error> {
+        self.0.fill_bytes(dst);
+        Ok(())
+    }
+}

@@ -26,7 +26,7 @@
 //!   and the new node takes its slot. Once a free path exists, a full tree rewires what it has
 //!   (the paper's behaviour).
 
-use crate::clock::{Clock, Meter};
+use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config};
 use crate::error::TreeError;
 use crate::geometry::{Ellipse, Point, sample_disc};
@@ -35,8 +35,8 @@ use crate::map::Map;
 use crate::metric::Metric;
 use crate::sample::{GoalView, sample_state};
 use crate::slots::{sat_u32, sort_small_by, to_u16, units};
-use crate::sweep::{NodeQueue, NodeStack, SeenSet};
-use crate::tree::{Cost, NodeId, Tree};
+use crate::sweep::{NodeQueue, NodeStack, SWEEP_CAP};
+use crate::tree::{Cost, Mark, NodeId, Tree};
 use rand_core::Rng;
 
 /// Most neighbours one `Nearby` query hands to the planner (more are counted, not used).
@@ -72,12 +72,10 @@ fn keep_candidate(near: &mut Near, id: NodeId) {
 pub struct TreeStore<const N: usize, const B: usize> {
     pub(crate) tree: Tree<N>,
     pub(crate) index: SpatialIndex<N, B>,
-    pub(crate) root_queue: NodeQueue<N>,
-    pub(crate) root_seen: SeenSet<N>,
-    pub(crate) goal_stack: NodeStack<N>,
+    pub(crate) root_queue: NodeQueue<SWEEP_CAP>,
+    pub(crate) goal_stack: NodeStack<SWEEP_CAP>,
     /// Goal rewiring's queue; RT-RRT*'s random-rewiring queue.
-    pub(crate) goal_queue: NodeQueue<N>,
-    pub(crate) goal_seen: SeenSet<N>,
+    pub(crate) goal_queue: NodeQueue<SWEEP_CAP>,
 }
 
 impl<const N: usize, const B: usize> Default for TreeStore<N, B> {
@@ -93,10 +91,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             tree: Tree::new(),
             index: SpatialIndex::new(),
             root_queue: NodeQueue::new(),
-            root_seen: SeenSet::new(),
             goal_stack: NodeStack::new(),
             goal_queue: NodeQueue::new(),
-            goal_seen: SeenSet::new(),
         }
     }
 
@@ -128,13 +124,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
 
     pub(crate) fn restart_root_sweep(&mut self) {
         self.root_queue.clear();
-        self.root_seen.clear();
+        self.tree.clear_marks(Mark::Root);
     }
 
     pub(crate) fn restart_goal_sweep(&mut self) {
         self.goal_stack.clear();
         self.goal_queue.clear();
-        self.goal_seen.clear();
+        self.tree.clear_marks(Mark::Goal);
     }
 
     /// Adds a node and indexes it.
@@ -180,6 +176,9 @@ pub(crate) struct Env<'a, 'm, M, const K: usize> {
     pub map: &'a Map<'m, K>,
     pub metric: &'a M,
     pub cfg: &'a Config,
+    /// The call's deadline: long loops inside one expansion check it too, so that a call
+    /// overruns its budget by at most one short step (see [`crate::planner::Planner::plan`]).
+    pub call: Deadline,
 }
 
 impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
@@ -253,6 +252,11 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
         let mut best = (near, f32::INFINITY);
         for id in self.tree.ids() {
+            // The metric scan reads the whole tree (about 2 ms for 2,048 nodes on a Cortex-M4
+            // at 168 MHz): it gives up when the call's time is over.
+            if id.0 & 63 == 63 && meter.expired(&env.call) {
+                return None;
+            }
             let d = env.metric(self.pos(id), x, meter);
             if d < best.1 {
                 best = (id, d);
@@ -535,11 +539,11 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let Some((_, victim)) = best else {
             return false;
         };
-        let _ = self.index.remove(victim);
+        let _ = self.index.remove(victim, self.pos(victim));
         match self.tree.remove_leaf(victim) {
             Ok(moved) => {
                 if let Some((old, new)) = moved {
-                    let _ = self.index.remove(old);
+                    let _ = self.index.remove(old, self.pos(new));
                     let _ = self.index.insert(new, self.pos(new));
                     for k in keep.iter_mut().filter(|k| **k == old) {
                         *k = new;

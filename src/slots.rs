@@ -27,6 +27,20 @@ pub(crate) fn wr<T>(slots: &mut [T], i: usize, value: T) {
     }
 }
 
+/// Reads a link (a node id or none) stored *zero-is-none*: slot value `id + 1`, 0 for none, so
+/// that an all-zero arena is an empty one (a `static` of it lands in `.bss`). Returns the id, or
+/// `u16::MAX` for none (ids are below `u16::MAX`).
+#[inline(always)]
+pub(crate) fn rd_link(slots: &[u16], i: usize) -> u16 {
+    rd(slots, i, 0).wrapping_sub(1)
+}
+
+/// Writes a link read by [`rd_link`] (`u16::MAX` writes none).
+#[inline(always)]
+pub(crate) fn wr_link(slots: &mut [u16], i: usize, id: u16) {
+    wr(slots, i, id.wrapping_add(1));
+}
+
 /// Row-major index of cell `(col, row)` in a grid `width` cells wide. With `u16` operands the
 /// result is below 2^32, so it fits a `usize` on every 32- and 64-bit target.
 #[inline(always)]

@@ -18,7 +18,7 @@ use core::cmp::Ordering;
 
 use crate::error::TreeError;
 use crate::geometry::Point;
-use crate::slots::{copy_slot, rd, reverse, wr};
+use crate::slots::{copy_slot, rd, rd_link, reverse, wr, wr_link};
 
 const NONE: u16 = u16::MAX;
 
@@ -111,8 +111,8 @@ pub struct Tree<const N: usize> {
     parent: [u16; N],
     first_child: [u16; N],
     next_sibling: [u16; N],
-    prev_sibling: [u16; N],
-    /// Bit 0: the edge from the parent is blocked. Bit 1: the cached path is blocked.
+    /// Bit 0: the edge from the parent is blocked. Bit 1: the cached path is blocked. Bits 2-3:
+    /// the marks of the rewiring sweeps ([`Mark`]).
     flags: [u8; N],
     len: u16,
     root: u16,
@@ -120,6 +120,16 @@ pub struct Tree<const N: usize> {
 
 const EDGE_BLOCKED: u8 = 1;
 const PATH_BLOCKED: u8 = 2;
+
+/// A per-node mark kept in the node's flag byte, for the rewiring sweeps' "seen" sets (two
+/// bits per node instead of a separate set; see [`crate::rewire`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Mark {
+    /// Seen by the root sweep.
+    Root = 4,
+    /// Seen by the goal sweep.
+    Goal = 8,
+}
 
 impl<const N: usize> Default for Tree<N> {
     fn default() -> Self {
@@ -137,10 +147,9 @@ impl<const N: usize> Tree<N> {
         Self {
             pos: [Point::ZERO; N],
             cost: [0.0; N],
-            parent: [NONE; N],
-            first_child: [NONE; N],
-            next_sibling: [NONE; N],
-            prev_sibling: [NONE; N],
+            parent: [0; N],
+            first_child: [0; N],
+            next_sibling: [0; N],
             flags: [0; N],
             len: 0,
             root: 0,
@@ -169,7 +178,34 @@ impl<const N: usize> Tree<N> {
 
     /// Whether `id` is a node without children.
     pub fn is_leaf(&self, id: NodeId) -> bool {
-        self.contains(id) && self.first_child.get(id.index()) == Some(&NONE)
+        self.contains(id) && rd_link(&self.first_child, id.index()) == NONE
+    }
+
+    /// Marks `id`; returns whether it was unmarked (false too for an unknown id).
+    pub(crate) fn mark(&mut self, id: NodeId, m: Mark) -> bool {
+        if !self.contains(id) || self.marked(id, m) {
+            return false;
+        }
+        self.set_flag(id.0, m as u8, true);
+        true
+    }
+
+    /// Removes mark `m` from `id`.
+    pub(crate) fn unmark(&mut self, id: NodeId, m: Mark) {
+        self.set_flag(id.0, m as u8, false);
+    }
+
+    /// Whether `id` carries mark `m`.
+    pub(crate) fn marked(&self, id: NodeId, m: Mark) -> bool {
+        rd(&self.flags, id.index(), 0) & m as u8 != 0
+    }
+
+    /// Clears mark `m` from every node: O(len) byte writes.
+    pub(crate) fn clear_marks(&mut self, m: Mark) {
+        let n = self.len();
+        for f in self.flags.iter_mut().take(n) {
+            *f &= !(m as u8);
+        }
     }
 
     /// Whether `id` names a node of this tree.
@@ -231,7 +267,7 @@ impl<const N: usize> Tree<N> {
         if !self.contains(id) {
             return None;
         }
-        let p = rd(&self.parent, id.index(), NONE);
+        let p = rd_link(&self.parent, id.index());
         (p != NONE).then_some(NodeId(p))
     }
 
@@ -244,7 +280,7 @@ impl<const N: usize> Tree<N> {
     /// The children of a node, most recently attached first.
     pub fn children(&self, id: NodeId) -> Children<'_, N> {
         let first = if self.contains(id) {
-            rd(&self.first_child, id.index(), NONE)
+            rd_link(&self.first_child, id.index())
         } else {
             NONE
         };
@@ -268,7 +304,7 @@ impl<const N: usize> Tree<N> {
             if v == NONE {
                 return false;
             }
-            v = rd(&self.parent, v as usize, NONE);
+            v = rd_link(&self.parent, v as usize);
         }
         false
     }
@@ -328,7 +364,7 @@ impl<const N: usize> Tree<N> {
         if !self.contains(child) {
             return Err(TreeError::UnknownNode);
         }
-        if rd(&self.parent, child.index(), NONE) != NONE {
+        if rd_link(&self.parent, child.index()) != NONE {
             self.set_flag(child.0, EDGE_BLOCKED, blocked);
             self.refresh_subtree(child.0);
         }
@@ -342,7 +378,7 @@ impl<const N: usize> Tree<N> {
         F: FnMut(Point, Point) -> bool,
     {
         for v in 0..self.len {
-            let p = rd(&self.parent, v as usize, NONE);
+            let p = rd_link(&self.parent, v as usize);
             let b = p != NONE
                 && blocked(
                     rd(&self.pos, p as usize, Point::ZERO),
@@ -366,7 +402,7 @@ impl<const N: usize> Tree<N> {
             if cur == NONE {
                 break;
             }
-            let next = rd(&self.parent, cur as usize, NONE);
+            let next = rd_link(&self.parent, cur as usize);
             let flag = rd(&self.flags, cur as usize, 0) & EDGE_BLOCKED != 0;
             self.unlink(cur);
             if prev != NONE {
@@ -392,7 +428,7 @@ impl<const N: usize> Tree<N> {
         if !self.contains(id) {
             return Err(TreeError::UnknownNode);
         }
-        if id.0 == self.root || self.first_child.get(id.index()) != Some(&NONE) {
+        if id.0 == self.root || rd_link(&self.first_child, id.index()) != NONE {
             return Err(TreeError::NotALeaf);
         }
         self.unlink(id.0);
@@ -406,30 +442,24 @@ impl<const N: usize> Tree<N> {
         copy_slot(&mut self.pos, from, to);
         copy_slot(&mut self.cost, from, to);
         copy_slot(&mut self.flags, from, to);
-        let (parent, prev, next) = (
-            rd(&self.parent, from, NONE),
-            rd(&self.prev_sibling, from, NONE),
-            rd(&self.next_sibling, from, NONE),
-        );
-        wr(&mut self.parent, to, parent);
-        wr(&mut self.prev_sibling, to, prev);
-        wr(&mut self.next_sibling, to, next);
+        let parent = rd_link(&self.parent, from);
+        // The link that points at `last` (its parent's first child, or its previous sibling).
+        let prev = self.prev_sibling(last);
+        copy_slot(&mut self.parent, from, to);
+        copy_slot(&mut self.next_sibling, from, to);
         copy_slot(&mut self.first_child, from, to);
         if prev != NONE {
-            wr(&mut self.next_sibling, prev as usize, id.0);
+            wr_link(&mut self.next_sibling, prev as usize, id.0);
         } else if parent != NONE {
-            wr(&mut self.first_child, parent as usize, id.0);
+            wr_link(&mut self.first_child, parent as usize, id.0);
         }
-        if next != NONE {
-            wr(&mut self.prev_sibling, next as usize, id.0);
-        }
-        let mut c = rd(&self.first_child, to, NONE);
+        let mut c = rd_link(&self.first_child, to);
         for _ in 0..self.len {
             if c == NONE {
                 break;
             }
-            wr(&mut self.parent, c as usize, id.0);
-            c = rd(&self.next_sibling, c as usize, NONE);
+            wr_link(&mut self.parent, c as usize, id.0);
+            c = rd_link(&self.next_sibling, c as usize);
         }
         if self.root == last {
             self.root = id.0;
@@ -467,7 +497,7 @@ impl<const N: usize> Tree<N> {
             }
             *buf.get_mut(n).ok_or(TreeError::BufferTooSmall)? = item(v);
             n = n.saturating_add(1);
-            v = rd(&self.parent, v as usize, NONE);
+            v = rd_link(&self.parent, v as usize);
         }
         if let Some(path) = buf.get_mut(..n) {
             reverse(path);
@@ -488,38 +518,32 @@ impl<const N: usize> Tree<N> {
             let i = v as usize;
             let id = NodeId(v);
             let links = [
-                rd(&self.parent, i, NONE),
-                rd(&self.first_child, i, NONE),
-                rd(&self.next_sibling, i, NONE),
-                rd(&self.prev_sibling, i, NONE),
+                rd_link(&self.parent, i),
+                rd_link(&self.first_child, i),
+                rd_link(&self.next_sibling, i),
             ];
             if !links.iter().all(|&l| ok(l)) {
                 return Err(Invariant::DanglingLink(id));
             }
-            if (v == self.root) != (rd(&self.parent, i, NONE) == NONE) {
+            if (v == self.root) != (rd_link(&self.parent, i) == NONE) {
                 return Err(Invariant::RootParent(id));
             }
             // Reaches the root within n steps.
             if !self.in_subtree(id, NodeId(self.root)) {
                 return Err(Invariant::NotConnected(id));
             }
-            // Every child lists this node as parent, and the back links agree.
-            let mut prev = NONE;
-            let mut c = rd(&self.first_child, i, NONE);
+            // Every child lists this node as parent, and the list ends.
+            let mut c = rd_link(&self.first_child, i);
             let mut count = 0u16;
             while c != NONE {
                 count = count.saturating_add(1);
-                if count > n
-                    || rd(&self.parent, c as usize, NONE) != v
-                    || rd(&self.prev_sibling, c as usize, NONE) != prev
-                {
+                if count > n || rd_link(&self.parent, c as usize) != v {
                     return Err(Invariant::ChildList(id));
                 }
-                prev = c;
-                c = rd(&self.next_sibling, c as usize, NONE);
+                c = rd_link(&self.next_sibling, c as usize);
             }
             // And this node appears in its parent's list.
-            let p = rd(&self.parent, i, NONE);
+            let p = rd_link(&self.parent, i);
             if p != NONE && !self.children(NodeId(p)).any(|c| c == id) {
                 return Err(Invariant::ChildList(id));
             }
@@ -529,7 +553,7 @@ impl<const N: usize> Tree<N> {
         // means by induction that each cached cost equals the sum along its root path.
         for v in 0..n {
             let i = v as usize;
-            let p = rd(&self.parent, i, NONE);
+            let p = rd_link(&self.parent, i);
             let expected = if p == NONE {
                 Cost::ZERO
             } else {
@@ -560,10 +584,9 @@ impl<const N: usize> Tree<N> {
     fn init_node(&mut self, id: u16, pos: Point, parent: u16) {
         let i = id as usize;
         wr(&mut self.pos, i, pos);
-        wr(&mut self.parent, i, parent);
-        wr(&mut self.first_child, i, NONE);
-        wr(&mut self.next_sibling, i, NONE);
-        wr(&mut self.prev_sibling, i, NONE);
+        wr_link(&mut self.parent, i, parent);
+        wr_link(&mut self.first_child, i, NONE);
+        wr_link(&mut self.next_sibling, i, NONE);
     }
 
     fn set_flag(&mut self, v: u16, bit: u8, on: bool) {
@@ -574,43 +597,53 @@ impl<const N: usize> Tree<N> {
 
     /// Pushes `c` (currently detached) at the front of `p`'s child list.
     fn link(&mut self, c: u16, p: u16) {
-        let first = rd(&self.first_child, p as usize, NONE);
-        wr(&mut self.parent, c as usize, p);
-        wr(&mut self.prev_sibling, c as usize, NONE);
-        wr(&mut self.next_sibling, c as usize, first);
-        if first != NONE {
-            wr(&mut self.prev_sibling, first as usize, c);
-        }
-        wr(&mut self.first_child, p as usize, c);
+        let first = rd_link(&self.first_child, p as usize);
+        wr_link(&mut self.parent, c as usize, p);
+        wr_link(&mut self.next_sibling, c as usize, first);
+        wr_link(&mut self.first_child, p as usize, c);
     }
 
     /// Detaches `c` from its parent's child list (no-op for a detached node).
     fn unlink(&mut self, c: u16) {
-        let p = rd(&self.parent, c as usize, NONE);
+        let p = rd_link(&self.parent, c as usize);
         if p == NONE {
             return;
         }
-        let (prev, next) = (
-            rd(&self.prev_sibling, c as usize, NONE),
-            rd(&self.next_sibling, c as usize, NONE),
-        );
+        let prev = self.prev_sibling(c);
+        let next = rd_link(&self.next_sibling, c as usize);
         if prev == NONE {
-            wr(&mut self.first_child, p as usize, next);
+            wr_link(&mut self.first_child, p as usize, next);
         } else {
-            wr(&mut self.next_sibling, prev as usize, next);
+            wr_link(&mut self.next_sibling, prev as usize, next);
         }
-        if next != NONE {
-            wr(&mut self.prev_sibling, next as usize, prev);
+        wr_link(&mut self.parent, c as usize, NONE);
+        wr_link(&mut self.next_sibling, c as usize, NONE);
+    }
+
+    /// The sibling listed just before `c` in its parent's child list (`NONE` when `c` is the
+    /// first child or the root). The list is singly linked (one link less per node), so this
+    /// walks it: O(children of the parent).
+    fn prev_sibling(&self, c: u16) -> u16 {
+        let p = rd_link(&self.parent, c as usize);
+        if p == NONE {
+            return NONE;
         }
-        wr(&mut self.parent, c as usize, NONE);
-        wr(&mut self.prev_sibling, c as usize, NONE);
-        wr(&mut self.next_sibling, c as usize, NONE);
+        let mut prev = NONE;
+        let mut v = rd_link(&self.first_child, p as usize);
+        for _ in 0..self.len {
+            if v == c || v == NONE {
+                break;
+            }
+            prev = v;
+            v = rd_link(&self.next_sibling, v as usize);
+        }
+        prev
     }
 
     /// Recomputes the cached cost of `v` from its parent's.
     fn refresh_cost(&mut self, v: u16) {
         let i = v as usize;
-        let p = rd(&self.parent, i, NONE);
+        let p = rd_link(&self.parent, i);
         if p == NONE {
             wr(&mut self.cost, i, 0.0);
             self.set_flag(v, PATH_BLOCKED, false);
@@ -640,7 +673,7 @@ impl<const N: usize> Tree<N> {
 
     /// The node after `v` in a preorder walk of `top`'s subtree.
     fn next_preorder(&self, v: u16, top: u16) -> Option<u16> {
-        let fc = rd(&self.first_child, v as usize, NONE);
+        let fc = rd_link(&self.first_child, v as usize);
         if fc != NONE {
             return Some(fc);
         }
@@ -649,11 +682,11 @@ impl<const N: usize> Tree<N> {
             if u == top {
                 return None;
             }
-            let s = rd(&self.next_sibling, u as usize, NONE);
+            let s = rd_link(&self.next_sibling, u as usize);
             if s != NONE {
                 return Some(s);
             }
-            u = rd(&self.parent, u as usize, NONE);
+            u = rd_link(&self.parent, u as usize);
             if u == NONE {
                 return None;
             }
@@ -676,12 +709,7 @@ impl<const N: usize> Iterator for Children<'_, N> {
             return None;
         }
         let c = self.next;
-        self.next = self
-            .tree
-            .next_sibling
-            .get(c as usize)
-            .copied()
-            .unwrap_or(NONE);
+        self.next = rd_link(&self.tree.next_sibling, c as usize);
         Some(NodeId(c))
     }
 }

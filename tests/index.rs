@@ -47,7 +47,7 @@ fn index_agrees_with_linear_scan() {
         for _ in 0..n / 10 {
             let i = rng.next_u32() as usize % n;
             if present[i] {
-                idx.remove(NodeId(i as u16)).unwrap();
+                idx.remove(NodeId(i as u16), pts[i]).unwrap();
                 present[i] = false;
             }
         }

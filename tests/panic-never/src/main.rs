@@ -132,7 +132,7 @@ fn main() -> ! {
         sink ^= idx.nearest(point(), &pts).map_or(0, |(id, _)| id.0 as u32);
         let mut out = heapless::Vec::<NodeId, 8>::new();
         sink ^= idx.within(point(), black_box(3.0), &pts, &mut out) as u32;
-        let _ = idx.remove(NodeId(black_box(3)));
+        let _ = idx.remove(NodeId(black_box(3)), point());
     }
     // Clocks.
     let clock = FakeClock::new(black_box(u64::MAX));
