@@ -37,6 +37,7 @@ fn checks() -> Result<u32, &'static str> {
             rows,
             cell_size: 1.0,
             scale: 1.0,
+            layout: bi_am_rrt::metric::Layout::Uniform,
         };
         let bytes = h.to_bytes(fnv1a32(&[]));
         if DiffusionTable::new(&bytes).err() != Some(TableError::Truncated) {
@@ -52,6 +53,7 @@ fn checks() -> Result<u32, &'static str> {
         rows: 8192,
         cell_size: 1.0,
         scale: 1.0,
+        layout: bi_am_rrt::metric::Layout::Uniform,
     };
     if huge.payload_len().is_some() || huge.table_len().is_some() {
         return Err("an 8 GiB payload length fit a 32-bit usize");
@@ -65,6 +67,7 @@ fn checks() -> Result<u32, &'static str> {
         rows: 3,
         cell_size: 1.0,
         scale: 0.5,
+        layout: bi_am_rrt::metric::Layout::Uniform,
     };
     let mut buf = [0u8; 32 + 4 * 3 * 2 * 2];
     let n = write_table(&h, &mut buf, |c, r, out| {

@@ -11,26 +11,37 @@
 //! A metric returns `f32::INFINITY` for a position it cannot place (an obstacle, outside the
 //! map, a region cut off from the main free component).
 //!
-//! # Table format (version 1)
+//! # Table format (versions 1 and 2)
 //!
 //! Little-endian throughout. A 32-byte header, then the payload:
 //!
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `b"BIAMDIFF"` |
-//! | 8 | 2 | format version (1) |
+//! | 8 | 2 | format version (1: uniform, 2: pieces) |
 //! | 10 | 2 | element kind: 1 = `i16` quantised, 2 = `f32` |
 //! | 12 | 2 | dimensions `k` (1..=32) |
-//! | 14 | 2 | table columns |
-//! | 16 | 2 | table rows |
-//! | 18 | 2 | reserved, 0 |
+//! | 14 | 2 | columns (v1: table cells; v2: map cells) |
+//! | 16 | 2 | rows (likewise) |
+//! | 18 | 2 | v1: 0; v2: block side `b` in cells (1..=64) |
 //! | 20 | 4 | cell size in metres (`f32`, finite, positive) |
 //! | 24 | 4 | scale (`f32`): coordinate = element * scale |
 //! | 28 | 4 | FNV-1a 32-bit hash of the payload |
 //!
-//! The payload holds `cols * rows * k` elements, cell-major in row-major cell order (cell
-//! `(col, row)` starts at element `(row * cols + col) * k`). A cell whose first element is
-//! `i16::MIN` (kind 1) or NaN (kind 2) is unreachable.
+//! **Version 1 (uniform).** The payload holds `cols * rows` entries of `k` elements, in
+//! row-major cell order (cell `(col, row)` is entry `row * cols + col`). A table cell may cover
+//! several map cells: then all of them share one entry, even when a wall splits them.
+//!
+//! **Version 2 (pieces).** The map's cells are grouped in `b x b` blocks; each block holds one
+//! entry per *connected free piece* of it, so a coarse table never gives a cell coordinates
+//! from across a wall. The payload: the entry count `E` (`u32`); for each block (row-major,
+//! `ceil(cols / b) x ceil(rows / b)` of them) the index of its first entry (`u16`, so
+//! `E <= 65,536`); for each map cell (row-major, two per byte, low nibble first) its piece
+//! within the block, 1..=15, or 0 for none; then the `E` entries of `k` elements. Cell
+//! `(col, row)` with piece `q > 0` reads entry `first[block] + q - 1`.
+//!
+//! In both, an entry whose first element is `i16::MIN` (kind 1) or NaN (kind 2) is
+//! unreachable, as is a v2 cell of piece 0.
 
 use crate::geometry::Point;
 use crate::slots::{cell_index, sat_u32, to_u16};
@@ -113,8 +124,8 @@ impl core::error::Error for TableError {}
 
 /// Magic bytes at the start of a diffusion table.
 pub const TABLE_MAGIC: [u8; 8] = *b"BIAMDIFF";
-/// The table format version this build reads and writes.
-pub const TABLE_VERSION: u16 = 1;
+/// The newest table format version this build reads and writes (it reads version 1 too).
+pub const TABLE_VERSION: u16 = 2;
 /// Header size in bytes.
 pub const TABLE_HEADER_LEN: usize = 32;
 /// Most dimensions a table may have.
@@ -170,17 +181,68 @@ pub struct TableHeader {
     pub cell_size: f32,
     /// Multiplier from stored element to coordinate.
     pub scale: f32,
+    /// How positions map to entries.
+    pub layout: Layout,
 }
+
+/// How a table maps positions to its entries (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Layout {
+    /// Version 1: one entry per table cell.
+    Uniform,
+    /// Version 2: map cells in `block x block` blocks, one entry per connected free piece of a
+    /// block, `entries` in all.
+    Pieces {
+        /// Block side in map cells (1..=64).
+        block: u16,
+        /// Entries stored (at most 65,536).
+        entries: u32,
+    },
+}
+
+/// Most entries a version-2 table may hold (block offsets are `u16`).
+pub const PIECES_MAX_ENTRIES: u32 = 65_536;
+/// Largest block side of a version-2 table (a block holds at most 15 pieces).
+pub const PIECES_MAX_BLOCK: u16 = 64;
 
 impl TableHeader {
     /// Payload size in bytes; `None` when it does not fit the target's `usize` (a header
     /// claiming 8192 x 8192 cells of 32 `f32` is 8 GiB: more than a 32-bit address space).
     pub fn payload_len(&self) -> Option<usize> {
-        let len = (self.cols as u64)
-            .checked_mul(self.rows as u64)?
-            .checked_mul(self.dims as u64)?
-            .checked_mul(self.kind.size() as u64)?;
+        let entry = (self.dims as u64).checked_mul(self.kind.size() as u64)?;
+        let len = match self.layout {
+            Layout::Uniform => (self.cols as u64)
+                .checked_mul(self.rows as u64)?
+                .checked_mul(entry)?,
+            Layout::Pieces { entries, .. } => {
+                let p = self.pieces()?;
+                (p.coords_at as u64).checked_add((entries as u64).checked_mul(entry)?)?
+            }
+        };
         usize::try_from(len).ok()
+    }
+
+    /// Where the parts of a version-2 payload start; `None` for version 1.
+    fn pieces(&self) -> Option<PieceParts> {
+        let Layout::Pieces { block, .. } = self.layout else {
+            return None;
+        };
+        let b = u32::from(block).max(1);
+        let (cols, rows) = (u32::from(self.cols), u32::from(self.rows));
+        let block_cols = cols.div_ceil(b);
+        let blocks = block_cols.checked_mul(rows.div_ceil(b))?;
+        let nibble_bytes = cols.checked_mul(rows)?.div_ceil(2);
+        let firsts_at: u32 = 4;
+        let nibbles_at = firsts_at.checked_add(blocks.checked_mul(2)?)?;
+        let coords_at = nibbles_at.checked_add(nibble_bytes)?;
+        Some(PieceParts {
+            block: b,
+            block_cols,
+            firsts_at: usize::try_from(firsts_at).ok()?,
+            nibbles_at: usize::try_from(nibbles_at).ok()?,
+            coords_at: usize::try_from(coords_at).ok()?,
+        })
     }
 
     /// Payload plus header, in bytes: the table's whole size.
@@ -191,13 +253,14 @@ impl TableHeader {
     /// The 32 header bytes for a payload with this checksum.
     pub fn to_bytes(&self, checksum: u32) -> [u8; TABLE_HEADER_LEN] {
         let mut h = [0u8; TABLE_HEADER_LEN];
-        let fields: [(usize, &[u8]); 9] = [
+        let fields: [(usize, &[u8]); 10] = [
             (0, &TABLE_MAGIC),
-            (8, &TABLE_VERSION.to_le_bytes()),
+            (8, &self.version().to_le_bytes()),
             (10, &self.kind.code().to_le_bytes()),
             (12, &self.dims.to_le_bytes()),
             (14, &self.cols.to_le_bytes()),
             (16, &self.rows.to_le_bytes()),
+            (18, &self.block_field().to_le_bytes()),
             (20, &self.cell_size.to_le_bytes()),
             (24, &self.scale.to_le_bytes()),
             (28, &checksum.to_le_bytes()),
@@ -209,6 +272,33 @@ impl TableHeader {
         }
         h
     }
+}
+
+impl TableHeader {
+    /// The format version of this layout.
+    pub const fn version(&self) -> u16 {
+        match self.layout {
+            Layout::Uniform => 1,
+            Layout::Pieces { .. } => 2,
+        }
+    }
+
+    const fn block_field(&self) -> u16 {
+        match self.layout {
+            Layout::Uniform => 0,
+            Layout::Pieces { block, .. } => block,
+        }
+    }
+}
+
+/// Offsets of the parts of a version-2 payload.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct PieceParts {
+    block: u32,
+    block_cols: u32,
+    firsts_at: usize,
+    nibbles_at: usize,
+    coords_at: usize,
 }
 
 /// Copies `src` into `dst` (lengths equal by construction; `copy_from_slice` would carry a
@@ -236,6 +326,9 @@ fn le_u32(b: &[u8], at: usize) -> Option<u32> {
 pub struct DiffusionTable<'a> {
     header: TableHeader,
     payload: &'a [u8],
+    /// The entries (all of the payload in version 1).
+    coords: &'a [u8],
+    parts: Option<PieceParts>,
     inv_cell: f32,
 }
 
@@ -250,7 +343,8 @@ impl<'a> DiffusionTable<'a> {
             return Err(TableError::BadMagic);
         }
         let field = |at| le_u16(head, at).ok_or(TableError::Truncated);
-        if field(8)? != TABLE_VERSION {
+        let version = field(8)?;
+        if version != 1 && version != 2 {
             return Err(TableError::UnsupportedVersion);
         }
         let kind = match field(10)? {
@@ -275,6 +369,25 @@ impl<'a> DiffusionTable<'a> {
         {
             return Err(TableError::BadHeader);
         }
+        let block = field(18)?;
+        let layout = if version == 1 {
+            if block != 0 {
+                return Err(TableError::BadHeader);
+            }
+            Layout::Uniform
+        } else {
+            if block == 0 || block > PIECES_MAX_BLOCK {
+                return Err(TableError::BadHeader);
+            }
+            let entries = bytes
+                .get(TABLE_HEADER_LEN..)
+                .and_then(|p| le_u32(p, 0))
+                .ok_or(TableError::Truncated)?;
+            if entries > PIECES_MAX_ENTRIES {
+                return Err(TableError::BadHeader);
+            }
+            Layout::Pieces { block, entries }
+        };
         let header = TableHeader {
             kind,
             dims,
@@ -282,6 +395,7 @@ impl<'a> DiffusionTable<'a> {
             rows,
             cell_size,
             scale,
+            layout,
         };
         // A payload larger than the address space cannot be present: truncated.
         let end = header.table_len().ok_or(TableError::Truncated)?;
@@ -291,9 +405,15 @@ impl<'a> DiffusionTable<'a> {
         if fnv1a32(payload) != checksum {
             return Err(TableError::BadChecksum);
         }
+        let parts = header.pieces();
+        let coords = payload
+            .get(parts.map_or(0, |p| p.coords_at)..)
+            .ok_or(TableError::Truncated)?;
         Ok(Self {
             header,
             payload,
+            coords,
+            parts,
             inv_cell: 1.0 / cell_size,
         })
     }
@@ -323,7 +443,26 @@ impl<'a> DiffusionTable<'a> {
         } else {
             r
         };
-        (c < cols && r < rows).then(|| cell_index(to_u16(c), to_u16(r), to_u16(cols)))
+        if c >= cols || r >= rows {
+            return None;
+        }
+        let cell = cell_index(to_u16(c), to_u16(r), to_u16(cols));
+        let Some(parts) = self.parts else {
+            return Some(cell);
+        };
+        // Version 2: the cell's piece within its block, then the block's first entry.
+        let byte = *self.payload.get(parts.nibbles_at.checked_add(cell / 2)?)?;
+        let piece = if cell % 2 == 0 { byte & 0x0f } else { byte >> 4 };
+        if piece == 0 {
+            return None;
+        }
+        let block = r
+            .checked_div(parts.block)?
+            .checked_mul(parts.block_cols)?
+            .checked_add(c.checked_div(parts.block)?)?;
+        let at = parts.firsts_at.checked_add(usize::try_from(block).ok()?.checked_mul(2)?)?;
+        let first = le_u16(self.payload, at)?;
+        usize::from(first).checked_add(usize::from(piece))?.checked_sub(1)
     }
 
     /// Reads coordinate `d` of `cell` as stored (before scaling); `None` if unreachable.
@@ -334,7 +473,7 @@ impl<'a> DiffusionTable<'a> {
         let k = self.header.dims as usize;
         let size = self.header.kind.size();
         let at = cell.checked_mul(k)?.checked_add(d)?.checked_mul(size)?;
-        let bytes = self.payload.get(at..at.checked_add(size)?)?;
+        let bytes = self.coords.get(at..at.checked_add(size)?)?;
         match self.header.kind {
             ElementKind::I16 => {
                 let v = i16::from_le_bytes(bytes.try_into().ok()?);
@@ -399,55 +538,142 @@ fn quantise(v: f32) -> i16 {
     libm::roundf(v).clamp(-32767.0, 32767.0) as i16
 }
 
-/// Writes a table (header and payload) into `out` from per-cell coordinates given by
-/// `coords(col, row, &mut [f32]) -> bool` (false: unreachable). Returns the bytes written, or
-/// `None` when `out` is too small or the header is invalid. For `ElementKind::I16` each
-/// coordinate is stored as `round(value / scale)`, clamped to `-32767..=32767`.
-pub fn write_table<F>(header: &TableHeader, out: &mut [u8], mut coords: F) -> Option<usize>
-where
-    F: FnMut(u16, u16, &mut [f32]) -> bool,
-{
+/// Encodes one entry's coordinates (or "unreachable") at `payload[at..]`; returns the offset
+/// after it.
+fn put_entry(
+    header: &TableHeader,
+    payload: &mut [u8],
+    mut at: usize,
+    reachable: bool,
+    coords: &[f32],
+) -> Option<usize> {
+    let size = header.kind.size();
+    for &v in coords {
+        let dst = payload.get_mut(at..at.checked_add(size)?)?;
+        match header.kind {
+            ElementKind::I16 => {
+                let q = if reachable {
+                    quantise(v / header.scale)
+                } else {
+                    i16::MIN
+                };
+                copy_bytes(dst, &q.to_le_bytes());
+            }
+            ElementKind::F32 => {
+                let q = if reachable {
+                    v / header.scale
+                } else {
+                    f32::NAN
+                };
+                copy_bytes(dst, &q.to_le_bytes());
+            }
+        }
+        at = at.checked_add(size)?;
+    }
+    Some(at)
+}
+
+/// Splits `out` into header and payload for a table of `header`'s size, after checking the
+/// fields every writer needs.
+fn table_parts<'o>(header: &TableHeader, out: &'o mut [u8]) -> Option<(&'o mut [u8], &'o mut [u8])> {
     let k = header.dims as usize;
     if k == 0 || k > TABLE_MAX_DIMS || !(header.scale.is_finite() && header.scale > 0.0) {
         return None;
     }
     let total = header.table_len()?;
-    let out = out.get_mut(..total)?;
-    let (head, payload) = out.split_at_mut_checked(TABLE_HEADER_LEN)?;
+    out.get_mut(..total)?.split_at_mut_checked(TABLE_HEADER_LEN)
+}
+
+/// Writes a version-1 table (header and payload) into `out` from per-cell coordinates given
+/// by `coords(col, row, &mut [f32]) -> bool` (false: unreachable). Returns the bytes written,
+/// or `None` when `out` is too small or the header is invalid (or not `Layout::Uniform`). For
+/// `ElementKind::I16` each coordinate is stored as `round(value / scale)`, clamped to
+/// `-32767..=32767`.
+pub fn write_table<F>(header: &TableHeader, out: &mut [u8], mut coords: F) -> Option<usize>
+where
+    F: FnMut(u16, u16, &mut [f32]) -> bool,
+{
+    if header.layout != Layout::Uniform {
+        return None;
+    }
+    let (head, payload) = table_parts(header, out)?;
     let mut buf = [0f32; TABLE_MAX_DIMS];
-    let size = header.kind.size();
     let mut at: usize = 0;
     for row in 0..header.rows {
         for col in 0..header.cols {
-            let coords_of_cell = buf.get_mut(..k)?;
-            let reachable = coords(col, row, coords_of_cell);
-            for &v in coords_of_cell.iter() {
-                let dst = payload.get_mut(at..at.checked_add(size)?)?;
-                match header.kind {
-                    ElementKind::I16 => {
-                        let q = if reachable {
-                            quantise(v / header.scale)
-                        } else {
-                            i16::MIN
-                        };
-                        copy_bytes(dst, &q.to_le_bytes());
-                    }
-                    ElementKind::F32 => {
-                        let q = if reachable {
-                            v / header.scale
-                        } else {
-                            f32::NAN
-                        };
-                        copy_bytes(dst, &q.to_le_bytes());
-                    }
-                }
-                at = at.checked_add(size)?;
-            }
+            let c = buf.get_mut(..header.dims as usize)?;
+            let reachable = coords(col, row, c);
+            at = put_entry(header, payload, at, reachable, c)?;
         }
     }
     let sum = fnv1a32(payload);
     copy_bytes(head, &header.to_bytes(sum));
-    Some(total)
+    header.table_len()
+}
+
+/// Writes a version-2 table (module docs) into `out`. `piece(col, row)` gives each map cell's
+/// piece within its block: 0 for none, else 1..=15, numbered from 1 without gaps in each
+/// block. Entries are numbered block by block (row-major blocks), pieces in order within a
+/// block; `coords(entry, &mut [f32]) -> bool` gives each one's coordinates (false:
+/// unreachable). `header.layout` must be `Layout::Pieces` with the right entry count. Returns
+/// the bytes written, or `None` when something does not fit or disagrees.
+pub fn write_piece_table<P, F>(
+    header: &TableHeader,
+    out: &mut [u8],
+    mut piece: P,
+    mut coords: F,
+) -> Option<usize>
+where
+    P: FnMut(u16, u16) -> u8,
+    F: FnMut(u32, &mut [f32]) -> bool,
+{
+    let parts = header.pieces()?;
+    let Layout::Pieces { entries, .. } = header.layout else {
+        return None;
+    };
+    let (head, payload) = table_parts(header, out)?;
+    copy_bytes(payload.get_mut(..4)?, &entries.to_le_bytes());
+    let (cols, rows, b) = (u32::from(header.cols), u32::from(header.rows), parts.block);
+    let mut next: u32 = 0;
+    for br in 0..rows.div_ceil(b) {
+        for bc in 0..parts.block_cols {
+            let block = br.checked_mul(parts.block_cols)?.checked_add(bc)?;
+            let at = parts.firsts_at.checked_add(usize::try_from(block).ok()?.checked_mul(2)?)?;
+            let first = u16::try_from(next).ok()?;
+            copy_bytes(payload.get_mut(at..at.checked_add(2)?)?, &first.to_le_bytes());
+            let mut most = 0u8;
+            for r in br.checked_mul(b)?..br.checked_add(1)?.checked_mul(b)?.min(rows) {
+                for c in bc.checked_mul(b)?..bc.checked_add(1)?.checked_mul(b)?.min(cols) {
+                    let q = piece(to_u16(c), to_u16(r));
+                    if q > 15 {
+                        return None;
+                    }
+                    most = most.max(q);
+                    let cell = usize::try_from(r.checked_mul(cols)?.checked_add(c)?).ok()?;
+                    let byte = payload.get_mut(parts.nibbles_at.checked_add(cell / 2)?)?;
+                    *byte = if cell % 2 == 0 {
+                        (*byte & 0xf0) | q
+                    } else {
+                        (*byte & 0x0f) | (q << 4)
+                    };
+                }
+            }
+            next = next.checked_add(u32::from(most))?;
+        }
+    }
+    if next != entries {
+        return None;
+    }
+    let mut buf = [0f32; TABLE_MAX_DIMS];
+    let mut at = parts.coords_at;
+    for e in 0..entries {
+        let c = buf.get_mut(..header.dims as usize)?;
+        let reachable = coords(e, c);
+        at = put_entry(header, payload, at, reachable, c)?;
+    }
+    let sum = fnv1a32(payload);
+    copy_bytes(head, &header.to_bytes(sum));
+    header.table_len()
 }
 
 #[cfg(test)]
@@ -462,6 +688,7 @@ mod tests {
             rows: 2,
             cell_size: 1.0,
             scale: 0.5,
+            layout: Layout::Uniform,
         }
     }
 
@@ -470,6 +697,73 @@ mod tests {
         out[0] = col as f32;
         out[1] = row as f32 * 2.0;
         !(col == 2 && row == 1)
+    }
+
+    #[test]
+    fn piece_tables_keep_cells_on_their_side_of_a_wall() {
+        // 4 x 2 cells, 2 x 2 blocks. Block 0: column 0 is piece 1, column 1 piece 2 (a wall
+        // between them). Block 1: one piece, cell (2, 1) an obstacle.
+        let piece = |c: u16, r: u16| match (c, r) {
+            (0, _) => 1,
+            (1, _) => 2,
+            (2, 1) => 0,
+            _ => 1,
+        };
+        let coords = |e: u32, out: &mut [f32]| {
+            out[0] = e as f32 * 10.0;
+            out[1] = 0.0;
+            true
+        };
+        for kind in [ElementKind::I16, ElementKind::F32] {
+            let h = TableHeader {
+                kind,
+                dims: 2,
+                cols: 4,
+                rows: 2,
+                cell_size: 1.0,
+                scale: 0.5,
+                layout: Layout::Pieces {
+                    block: 2,
+                    entries: 3,
+                },
+            };
+            let mut buf = [0u8; 128];
+            let n = write_piece_table(&h, &mut buf, piece, coords).unwrap();
+            assert_eq!(n, 32 + 4 + 2 * 2 + 4 + 3 * 2 * kind.size());
+            let t = DiffusionTable::new(&buf[..n]).unwrap();
+            assert_eq!(t.header(), &h);
+            let d = |a: (f32, f32), b: (f32, f32)| {
+                t.distance(Point::new(a.0, a.1), Point::new(b.0, b.1))
+            };
+            assert_eq!(d((0.5, 0.5), (0.5, 1.5)), 0.0, "same piece");
+            assert_eq!(d((0.5, 0.5), (1.5, 0.5)), 10.0, "across the wall");
+            assert_eq!(d((0.5, 0.5), (3.5, 1.5)), 20.0);
+            assert!(d((0.5, 0.5), (2.5, 1.5)).is_infinite(), "obstacle cell");
+            assert!(!t.covers(Point::new(2.5, 1.5)) && t.covers(Point::new(2.5, 0.5)));
+            // Disagreements are refused: a wrong entry count, a piece above 15.
+            let wrong = TableHeader {
+                layout: Layout::Pieces {
+                    block: 2,
+                    entries: 4,
+                },
+                ..h
+            };
+            assert!(write_piece_table(&wrong, &mut buf, piece, coords).is_none());
+            assert!(write_piece_table(&h, &mut buf, |_, _| 16, coords).is_none());
+            // Any byte flipped is caught by the checksum; a bad block side by the header check.
+            let mut bad = buf;
+            bad[40] ^= 1;
+            assert_eq!(
+                DiffusionTable::new(&bad[..n]).unwrap_err(),
+                TableError::BadChecksum
+            );
+            let mut bad = buf;
+            bad[18] = 0;
+            assert_eq!(
+                DiffusionTable::new(&bad[..n]).unwrap_err(),
+                TableError::BadHeader
+            );
+        }
     }
 
     #[test]
@@ -510,6 +804,7 @@ mod tests {
             rows: 8192,
             cell_size: 1.0,
             scale: 1.0,
+            layout: Layout::Uniform,
         };
         let bogus = claims.to_bytes(fnv1a32(&[]));
         assert_eq!(

@@ -461,22 +461,35 @@ pub fn pearson(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
+/// How a table is laid out (the core's table versions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum TableLayout {
+    /// Version 2: blocks of `c x c` map cells with one entry per connected free piece of a
+    /// block (coarse and still exact about walls).
+    Pieces,
+    /// Version 1: one entry per `c x c` block, from the node nearest its centre (a cell may
+    /// get coordinates from across a wall).
+    Uniform,
+}
+
 /// Table layout options.
 #[derive(Clone, Copy, Debug)]
 pub struct TableOptions {
     /// Element encoding.
     pub kind: ElementKind,
-    /// Map cells per table cell along each axis (1: full resolution; 0: the smallest factor
-    /// whose table fits in `max_bytes`).
+    /// Map cells per block along each axis (1: full resolution; 0: the smallest factor whose
+    /// table fits in `max_bytes`).
     pub coarsen: u16,
     /// Size budget of an automatically coarsened table.
     pub max_bytes: usize,
+    /// Layout.
+    pub layout: TableLayout,
 }
 
-/// The default size budget: 192 KiB. A 100 x 100 map then gets 2 x 2 cells per table cell
-/// (49 KiB), a 200 x 200 map 3 x 3 (88 KiB); the planner's search times and path costs were
-/// measured unchanged against full-resolution `f32` tables (see the README).
-pub const DEFAULT_MAX_BYTES: usize = 192 * 1024;
+/// The default size budget: 128 KiB, the budget for the office map in firmware. A
+/// 100 x 100 map then gets a full-resolution piece table (2 x 2 blocks when it must), a
+/// 200 x 200 map 3 x 3 blocks; `bake` prints the error against full resolution.
+pub const DEFAULT_MAX_BYTES: usize = 128 * 1024;
 
 impl Default for TableOptions {
     fn default() -> Self {
@@ -484,12 +497,197 @@ impl Default for TableOptions {
             kind: ElementKind::I16,
             coarsen: 0,
             max_bytes: DEFAULT_MAX_BYTES,
+            layout: TableLayout::Pieces,
         }
     }
 }
 
+/// The connected free pieces of every `block x block` block of a graph's cells.
+#[derive(Clone, Debug)]
+pub struct Pieces {
+    /// Block side in cells.
+    pub block: u32,
+    /// Per map cell (row-major): its piece in its block, 1..=15, or 0 (no node).
+    pub piece: Vec<u8>,
+    /// Per entry (block by block, pieces in order): the graph nodes of the piece.
+    pub members: Vec<Vec<u32>>,
+}
+
+impl Pieces {
+    /// Splits every block into the pieces its cells form with the graph's edges inside the
+    /// block. A block with more than 15 pieces (not possible below 6 x 6 blocks) merges the
+    /// rest into its 15th.
+    pub fn of(graph: &GridGraph, block: u32) -> Self {
+        let (cols, rows, b) = (graph.cols, graph.rows, block.max(1));
+        let mut piece = vec![0u8; (cols * rows) as usize];
+        let mut members: Vec<Vec<u32>> = Vec::new();
+        let mut stack = Vec::new();
+        for br in 0..rows.div_ceil(b) {
+            for bc in 0..cols.div_ceil(b) {
+                let (c0, r0) = (bc * b, br * b);
+                let (c1, r1) = ((c0 + b).min(cols), (r0 + b).min(rows));
+                let inside = |cell: u32| {
+                    let (c, r) = (cell % cols, cell / cols);
+                    (c0..c1).contains(&c) && (r0..r1).contains(&r)
+                };
+                let mut count = 0u8;
+                for r in r0..r1 {
+                    for c in c0..c1 {
+                        let cell = r * cols + c;
+                        let node = graph.node_of_cell[cell as usize];
+                        if node == u32::MAX || piece[cell as usize] != 0 {
+                            continue;
+                        }
+                        if count < 15 {
+                            count += 1;
+                            members.push(Vec::new());
+                        }
+                        let group = members.last_mut().expect("a piece was pushed");
+                        piece[cell as usize] = count;
+                        group.push(node);
+                        stack.push(node);
+                        while let Some(n) = stack.pop() {
+                            for (m, _) in graph.neighbours(n) {
+                                let mc = graph.cell_of_node[m as usize];
+                                if inside(mc) && piece[mc as usize] == 0 {
+                                    piece[mc as usize] = count;
+                                    group.push(m);
+                                    stack.push(m);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Self {
+            block: b,
+            piece,
+            members,
+        }
+    }
+
+    /// The largest distance, in diffusion coordinates, from a member of an entry to the
+    /// entry's mean: the most the table can be off for a cell of that entry.
+    pub fn spread(map: &DiffusionMap, nodes: &[u32]) -> f64 {
+        let mean = Self::mean(map, nodes);
+        nodes
+            .iter()
+            .map(|&n| {
+                map.node(n)
+                    .iter()
+                    .zip(&mean)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The mean coordinates of some nodes.
+    pub fn mean(map: &DiffusionMap, nodes: &[u32]) -> Vec<f64> {
+        let mut m = vec![0.0; map.dims];
+        for &n in nodes {
+            for (acc, v) in m.iter_mut().zip(map.node(n)) {
+                *acc += v;
+            }
+        }
+        let k = nodes.len().max(1) as f64;
+        m.iter_mut().for_each(|v| *v /= k);
+        m
+    }
+
+    /// Splits entries whose [`Pieces::spread`] exceeds `tol` (each block keeps at most 15):
+    /// the widest entry of a block is cut in two at the median of its widest coordinate,
+    /// until every entry is within `tol` or the block is full. Cells keep their block; an
+    /// entry may then hold part of a connected piece (never cells of two pieces).
+    pub fn refine(&self, map: &DiffusionMap, graph: &GridGraph, tol: f64) -> Pieces {
+        let mut piece = vec![0u8; self.piece.len()];
+        let mut members = Vec::with_capacity(self.members.len());
+        // Entries come block by block; regroup them per block.
+        let mut at = 0;
+        let cols = graph.cols;
+        let block_of = |n: u32| {
+            let cell = graph.cell_of_node[n as usize];
+            ((cell / cols) / self.block, (cell % cols) / self.block)
+        };
+        while at < self.members.len() {
+            let b = block_of(self.members[at][0]);
+            let mut end = at;
+            while end < self.members.len() && block_of(self.members[end][0]) == b {
+                end += 1;
+            }
+            let mut group: Vec<(f64, Vec<u32>)> = self.members[at..end]
+                .iter()
+                .map(|m| (Self::spread(map, m), m.clone()))
+                .collect();
+            while group.len() < 15 {
+                let (i, &(w, _)) = group
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| a.1.0.total_cmp(&b.1.0))
+                    .expect("a block has an entry");
+                if w <= tol || group[i].1.len() < 2 {
+                    break;
+                }
+                let (_, nodes) = group.swap_remove(i);
+                // The widest coordinate, split at its median.
+                let d = (0..map.dims)
+                    .max_by(|&x, &y| {
+                        let range = |k: usize| {
+                            let (lo, hi) = nodes.iter().fold((f64::MAX, f64::MIN), |(l, h), &n| {
+                                (l.min(map.node(n)[k]), h.max(map.node(n)[k]))
+                            });
+                            hi - lo
+                        };
+                        range(x).total_cmp(&range(y))
+                    })
+                    .unwrap_or(0);
+                let mut sorted = nodes;
+                sorted.sort_by(|&a, &b| map.node(a)[d].total_cmp(&map.node(b)[d]));
+                let right = sorted.split_off(sorted.len() / 2);
+                group.push((Self::spread(map, &sorted), sorted));
+                group.push((Self::spread(map, &right), right));
+            }
+            // Keep the entries in a stable order (by their first cell) for a repeatable bake.
+            group.sort_by_key(|(_, m)| m.iter().map(|&n| graph.cell_of_node[n as usize]).min());
+            for (q, (_, nodes)) in group.into_iter().enumerate() {
+                for &n in &nodes {
+                    piece[graph.cell_of_node[n as usize] as usize] = q as u8 + 1;
+                }
+                members.push(nodes);
+            }
+            at = end;
+        }
+        Pieces {
+            block: self.block,
+            piece,
+            members,
+        }
+    }
+
+    /// The largest [`Pieces::spread`] of any entry.
+    pub fn max_spread(&self, map: &DiffusionMap) -> f64 {
+        self.members
+            .iter()
+            .map(|m| Self::spread(map, m))
+            .fold(0.0, f64::max)
+    }
+
+    /// Size of the table in bytes with `dims` elements of `elem` bytes per entry.
+    pub fn table_len(&self, cols: u32, rows: u32, dims: usize, elem: usize) -> usize {
+        let blocks = (cols.div_ceil(self.block) * rows.div_ceil(self.block)) as usize;
+        TABLE_HEADER_LEN
+            + 4
+            + 2 * blocks
+            + ((cols * rows) as usize).div_ceil(2)
+            + self.members.len() * dims * elem
+    }
+}
+
 impl TableOptions {
-    /// The coarsening factor used for a graph of `cols x rows` cells with `dims` coordinates.
+    /// The coarsening factor used for a graph of `cols x rows` cells with `dims` coordinates
+    /// in the uniform layout.
     pub fn factor(&self, cols: u32, rows: u32, dims: usize) -> u16 {
         if self.coarsen > 0 {
             return self.coarsen;
@@ -502,19 +700,97 @@ impl TableOptions {
             .find(|&c| size(c) <= self.max_bytes)
             .unwrap_or(64) as u16
     }
+
+    /// The entries of a graph's table: the connected pieces of `coarsen x coarsen` blocks,
+    /// refined where they spread widest, as far as `max_bytes` allows; with `coarsen` 0, the
+    /// block side (1..=8) whose refined table is most precise within `max_bytes` (full
+    /// resolution when it fits).
+    pub fn pieces(&self, graph: &GridGraph, map: &DiffusionMap) -> Pieces {
+        let dims = map.dims;
+        let fits = |p: &Pieces| {
+            p.members.len() <= bi_am_rrt::metric::PIECES_MAX_ENTRIES as usize
+                && p.table_len(graph.cols, graph.rows, dims, self.kind.size()) <= self.max_bytes
+        };
+        // The most precise refinement of block side `b` that fits (None if even the
+        // unrefined pieces do not).
+        let best_for = |b: u32| -> Option<(f64, Pieces)> {
+            let base = Pieces::of(graph, b);
+            if !fits(&base) {
+                return None;
+            }
+            let top = base.max_spread(map);
+            let (mut lo, mut hi) = (0.0f64, top);
+            let mut best = (top, base.clone());
+            for _ in 0..24 {
+                let mid = 0.5 * (lo + hi);
+                let r = base.refine(map, graph, mid);
+                if fits(&r) {
+                    best = (r.max_spread(map), r);
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            Some(best)
+        };
+        if self.coarsen > 0 {
+            let b = self.coarsen as u32;
+            return best_for(b).map_or_else(|| Pieces::of(graph, b), |(_, p)| p);
+        }
+        let full = Pieces::of(graph, 1);
+        if fits(&full) {
+            return full;
+        }
+        (2..=8u32)
+            .filter_map(best_for)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or(full, |(_, p)| p)
+    }
 }
 
-/// Writes the table of a diffusion map. With `coarsen > 1`, a table cell takes the
-/// coordinates of the graph node nearest its centre among the map cells it covers.
+/// Writes the table of a diffusion map (see [`TableLayout`] for what a coarse table holds).
 pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -> Result<Vec<u8>> {
-    let c = opts.factor(graph.cols, graph.rows, map.dims) as u32;
-    let cols = graph.cols.div_ceil(c) as u16;
-    let rows = graph.rows.div_ceil(c) as u16;
     let max_abs = map.coords.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let scale = match opts.kind {
         ElementKind::I16 => (max_abs / 32767.0).max(f64::MIN_POSITIVE) as f32,
         ElementKind::F32 => 1.0,
     };
+    if opts.layout == TableLayout::Pieces {
+        let p = opts.pieces(graph, map);
+        let header = TableHeader {
+            kind: opts.kind,
+            dims: map.dims as u16,
+            cols: u16::try_from(graph.cols).context("map too wide for a table")?,
+            rows: u16::try_from(graph.rows).context("map too tall for a table")?,
+            cell_size: graph.cell,
+            scale,
+            layout: bi_am_rrt::metric::Layout::Pieces {
+                block: p.block as u16,
+                entries: u32::try_from(p.members.len()).context("too many pieces")?,
+            },
+        };
+        let mut out = vec![0u8; header.table_len().context("table too large")?];
+        let cols = graph.cols;
+        let written = bi_am_rrt::metric::write_piece_table(
+            &header,
+            &mut out,
+            |c, r| p.piece[(r as u32 * cols + c as u32) as usize],
+            |e, coords| {
+                // The entry's mean coordinates: the point nearest all of its cells.
+                let nodes = &p.members[e as usize];
+                for (slot, v) in coords.iter_mut().zip(Pieces::mean(map, nodes)) {
+                    *slot = v as f32;
+                }
+                !nodes.is_empty()
+            },
+        )
+        .context("writing the table")?;
+        out.truncate(written);
+        return Ok(out);
+    }
+    let c = opts.factor(graph.cols, graph.rows, map.dims) as u32;
+    let cols = graph.cols.div_ceil(c) as u16;
+    let rows = graph.rows.div_ceil(c) as u16;
     let header = TableHeader {
         kind: opts.kind,
         dims: map.dims as u16,
@@ -522,6 +798,7 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
         rows,
         cell_size: graph.cell * c as f32,
         scale,
+        layout: bi_am_rrt::metric::Layout::Uniform,
     };
     let mut out = vec![0u8; header.table_len().context("table too large")?];
     let written = write_table(&header, &mut out, |tc, tr, coords| {
@@ -654,7 +931,10 @@ mod tests {
 
     #[test]
     fn automatic_coarsening_fits_the_budget() {
-        let o = TableOptions::default();
+        let o = TableOptions {
+            max_bytes: 192 * 1024,
+            ..TableOptions::default()
+        };
         assert_eq!(o.factor(100, 100, 10), 2);
         assert_eq!(o.factor(200, 200, 10), 3);
         assert_eq!(o.factor(30, 30, 10), 1);

@@ -9,7 +9,7 @@ use bi_am_rrt::metric::ElementKind;
 use clap::{Parser, Subcommand, ValueEnum};
 use host_sim::bake;
 use host_sim::clock::ClockKind;
-use host_sim::diffusion::{Options, TableOptions};
+use host_sim::diffusion::{Options, TableLayout, TableOptions};
 use host_sim::experiment::{self, ExperimentArgs, Goals};
 use host_sim::maps;
 use host_sim::run::{self, RunArgs};
@@ -105,6 +105,10 @@ enum Command {
         /// Diffusion table: size budget for --coarsen 0.
         #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
         max_bytes: usize,
+        /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
+        /// never across a wall) or `uniform` (one entry per block, the format-1 table).
+        #[arg(long, value_enum, default_value = "pieces")]
+        layout: TableLayout,
         /// Planning time per call in ms (default: the paper's 150).
         #[arg(long)]
         t_exp_ms: Option<u64>,
@@ -176,12 +180,38 @@ enum Command {
         /// Diffusion: size budget for --coarsen 0.
         #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
         max_bytes: usize,
+        /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
+        /// never across a wall) or `uniform` (one entry per block, the format-1 table).
+        #[arg(long, value_enum, default_value = "pieces")]
+        layout: TableLayout,
         /// Also write Rust source with a `static` table to this file.
         #[arg(long)]
         rust: Option<PathBuf>,
         /// Geodesic: also time the computation of every distance field (all pairs).
         #[arg(long)]
         all_pairs: bool,
+    },
+    /// Export a scenario for a firmware: its bit-packed grid, its diffusion table and Rust
+    /// source that `include!`s them as flash `static`s (with the start and goals).
+    Export {
+        /// Scenario file (TOML).
+        #[arg(long)]
+        scenarios: PathBuf,
+        /// Scenario to export.
+        #[arg(long)]
+        scenario: String,
+        /// Output folder (created): NAME.grid, NAME.table, NAME.rs.
+        #[arg(long)]
+        out: PathBuf,
+        /// Diffusion table: map cells per block along each axis (0: smallest that fits).
+        #[arg(long, default_value_t = 0)]
+        coarsen: u16,
+        /// Diffusion table: size budget for --coarsen 0.
+        #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
+        max_bytes: usize,
+        /// Diffusion table layout.
+        #[arg(long, value_enum, default_value = "pieces")]
+        layout: TableLayout,
     },
     /// Measure how the expansion rate changes as the tree grows (no motion, wall clock).
     Growth {
@@ -265,6 +295,7 @@ fn main() -> Result<()> {
             table_kind,
             coarsen,
             max_bytes,
+            layout,
             t_exp_ms,
             search_only,
             anytime_ms,
@@ -286,6 +317,7 @@ fn main() -> Result<()> {
                     kind: kind_of(table_kind),
                     coarsen,
                     max_bytes,
+                    layout,
                 },
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
@@ -386,6 +418,44 @@ fn main() -> Result<()> {
             }
             Ok(())
         }
+        Command::Export {
+            scenarios,
+            scenario,
+            out,
+            coarsen,
+            max_bytes,
+            layout,
+        } => {
+            let sc = maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0);
+            let t0 = Instant::now();
+            let ex = bake::export_flash(
+                &sc,
+                &TableOptions {
+                    kind: bi_am_rrt::metric::ElementKind::I16,
+                    coarsen,
+                    max_bytes,
+                    layout,
+                },
+                &out,
+            )?;
+            let e = &ex.error;
+            println!(
+                "{}: grid {} bytes, table {} bytes (max error {:.3e} = {:.2} % of the largest distance {:.3e} over {} pairs) in {:.1} s -> {}",
+                sc.name,
+                ex.grid_bytes,
+                ex.table_bytes,
+                e.max_abs,
+                100.0 * e.max_abs / e.max_distance.max(f64::MIN_POSITIVE),
+                e.max_distance,
+                e.pairs,
+                t0.elapsed().as_secs_f64(),
+                ex.source.display()
+            );
+            if let Some(w) = bake::error_warning(e) {
+                eprintln!("{w}");
+            }
+            Ok(())
+        }
         Command::Bake {
             map,
             metric,
@@ -393,6 +463,7 @@ fn main() -> Result<()> {
             kind,
             coarsen,
             max_bytes,
+            layout,
             rust,
             all_pairs,
         } => {
@@ -408,6 +479,7 @@ fn main() -> Result<()> {
                             kind,
                             coarsen,
                             max_bytes,
+                            layout,
                         },
                     )?;
                     let secs = t0.elapsed().as_secs_f64();
@@ -447,6 +519,13 @@ fn main() -> Result<()> {
                         e.bound,
                         e.max_distance
                     );
+                    println!(
+                        "largest error = {:.2} % of the largest distance",
+                        100.0 * e.max_abs / e.max_distance.max(f64::MIN_POSITIVE)
+                    );
+                    if let Some(w) = bake::error_warning(&e) {
+                        eprintln!("{w}");
+                    }
                     if let Some(rs) = rust {
                         let src = bake::rust_source("DIFFUSION_TABLE", &baked.table, &map);
                         bake::write_file(&rs, src.as_bytes())?;

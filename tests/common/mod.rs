@@ -137,6 +137,7 @@ pub fn landmark_table(g: &OccupancyGrid<'_>, k: usize) -> Vec<u8> {
         rows: g.rows(),
         cell_size: g.cell_size(),
         scale: 0.01,
+        layout: bi_am_rrt::metric::Layout::Uniform,
     };
     let mut out = vec![0u8; header.table_len().unwrap()];
     let cols = g.cols() as usize;

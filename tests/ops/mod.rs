@@ -124,6 +124,7 @@ fn table_from_bytes(grid: &OccupancyGrid<'_>, b: &mut Bytes<'_>) -> Vec<u8> {
         rows: grid.rows(),
         cell_size: grid.cell_size(),
         scale: grid.cell_size() / 16.0,
+        layout: bi_am_rrt::metric::Layout::Uniform,
     };
     let noise: Vec<u8> = (0..32).map(|_| b.u8()).collect();
     let mut out = vec![0u8; header.table_len().unwrap()];

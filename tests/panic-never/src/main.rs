@@ -96,6 +96,7 @@ fn main() -> ! {
             rows: 20,
             cell_size: 1.0,
             scale: 0.01,
+            layout: bi_am_rrt::metric::Layout::Uniform,
         });
         let mut table = [0u8; 32 + 20 * 20 * 2 * 2];
         let _ = write_table(&header, &mut table, |c, r, out| {
