@@ -74,6 +74,11 @@ pub struct Config {
     pub bidirectional: bool,
     /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`).
     pub new_rewiring: bool,
+    /// When the trees meet, the reverse tree joins the forward tree *whole*, re-rooted at the
+    /// meeting node (as far as the arena has room), instead of only its trunk from the meeting
+    /// node to the goal. Off (trunk only) is the paper; keeping the branches is its stated
+    /// future work.
+    pub keep_reverse_branches: bool,
     /// `t_exp`: expansion time per `plan` call.
     pub t_exp: Duration,
     /// `t_root`: root rewiring budget per expansion.
@@ -122,6 +127,7 @@ impl Config {
             metric,
             bidirectional: false,
             new_rewiring: false,
+            keep_reverse_branches: false,
             t_exp: Duration::from_millis(150),
             t_root: Duration::from_millis(t_root),
             t_goal: Duration::from_millis(t_goal),
@@ -171,6 +177,12 @@ impl Config {
     /// With the new rewiring on or off.
     pub const fn with_new_rewiring(mut self, on: bool) -> Self {
         self.new_rewiring = on;
+        self
+    }
+
+    /// With the reverse tree's branches kept at the meet (see the field).
+    pub const fn with_reverse_branches(mut self, on: bool) -> Self {
+        self.keep_reverse_branches = on;
         self
     }
 

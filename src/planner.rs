@@ -4,17 +4,20 @@
 //!
 //! # One `plan` call
 //!
-//! Until `t_exp` has passed on the caller's clock (or `max_expansions_per_call` is reached):
-//! expand the forward tree; then rewire it from the root for `t_root`; then, once the goal is
+//! The call's budget `t_exp` starts when it is made. First the root follows the agent (below),
+//! then, until `t_exp` has passed on the caller's clock (or `max_expansions_per_call` is
+//! reached): expand the forward tree; then rewire it from the root for `t_root`; then, once the goal is
 //! in it, goal rewiring for `t_goal` (and the second kind for another `t_goal` with the new
 //! rewiring) — RT-RRT* runs its random rewiring for `t_goal` instead. While the goal is not in
 //! the forward tree and bidirectional search is on, each step also expands the reverse tree
 //! (rooted at the goal, growing towards the agent's position when the goal was set) and
 //! rewires it from its root.
 //!
-//! Then the path is read from the root to the goal (or, before the goal joins, to the node
-//! `Nearest` the goal). If the agent is within `e_max / 10` of the root and the path's first
-//! edge is free, the tree is re-rooted at the path's next node. The root is the waypoint
+//! Following the agent: the path is read from the root to the goal (or, before the goal
+//! joins, to the node `Nearest` the goal). If the agent is within `e_max / 10` of the root and
+//! the path's first edge is free, the tree is re-rooted at the path's next node (an O(N) cost
+//! update, done before the expansions so that it spends the budget instead of overrunning it,
+//! and so that this call's rewiring already works from the new root). The root is the waypoint
 //! returned. (The agent must also see that node over a free segment; otherwise it first
 //! finishes its way to the root, so it never cuts a corner.)
 //!
@@ -443,12 +446,15 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             return Err(InputError::InObstacle);
         }
         let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64);
+        // The call's budget starts now: anchoring and following the agent spend it too, and
+        // they come first, so nothing but the final check runs after the last expansion.
+        self.call = Deadline::after(clock, self.cfg.t_exp);
         let trapped = self.map.obstacles().contains(agent);
         if !trapped {
             self.anchor(agent, &meter);
         }
-        let expansions = self.expand_for(&meter, clock);
         let advanced = !trapped && self.follow(agent, &meter);
+        let expansions = self.expand_for(&meter);
         Ok(self.progress(Some(agent), expansions, advanced, &meter))
     }
 
@@ -457,13 +463,14 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// agent position is given.
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
         let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64);
-        let expansions = self.expand_for(&meter, clock);
+        self.call = Deadline::after(clock, self.cfg.t_exp);
+        let expansions = self.expand_for(&meter);
         self.progress(None, expansions, false, &meter)
     }
 
-    fn expand_for<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) -> u32 {
-        let call = Deadline::after(clock, self.cfg.t_exp);
-        self.call = call;
+    /// Expansions until the call's deadline (set by the caller) or the expansion cap.
+    fn expand_for<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>) -> u32 {
+        let call = self.call;
         let mut expansions = 0;
         self.full = false;
         while expansions < self.cfg.max_expansions_per_call && !meter.expired(&call) {
@@ -816,6 +823,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
             parent = keep[0];
         }
+        if self.cfg.keep_reverse_branches {
+            return self.graft_whole(parent, b, meter);
+        }
         meter.charge(units(depth).saturating_mul(4));
         let mut blocked = false; // the meeting segment was tested free
         let mut v = Some(b);
@@ -832,5 +842,67 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             goal.node = Some(parent);
         }
         true
+    }
+
+    /// The whole reverse tree below forward node `a`, re-rooted at `b` (the meeting node):
+    /// after re-rooting, every trunk node's first child is the next trunk node, so a preorder
+    /// copy takes the trunk (and the goal) first, then the branches while the arena has room.
+    /// The walk needs no stack: it climbs the copy in step with the original. The caller has
+    /// made room for the trunk.
+    fn graft_whole<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {
+        let goal_r = self.rev.tree.root();
+        meter.charge(units(N / 8));
+        if self.rev.tree.set_root(b).is_err() {
+            return false;
+        }
+        let Ok(mut cur_f) = self.fwd.insert(self.rev.pos(b), a, false) else {
+            return false;
+        };
+        let mut cur_r = b;
+        let mut goal_f = (goal_r == Some(b)).then_some(cur_f);
+        let mut copied: usize = 1;
+        // Each node is entered once and left once: at most 2 * len steps.
+        'walk: for _ in 0..self.rev.tree.len().saturating_mul(2) {
+            // Down to the first child, or along to the next sibling (climbing as needed).
+            let (next_r, parent_f) = match self.rev.tree.first_child(cur_r) {
+                Some(c) => (c, cur_f),
+                None => loop {
+                    if cur_r == b {
+                        break 'walk;
+                    }
+                    if let Some(s) = self.rev.tree.next_sibling(cur_r) {
+                        break (s, self.fwd.tree.parent(cur_f).unwrap_or(a));
+                    }
+                    match (self.rev.tree.parent(cur_r), self.fwd.tree.parent(cur_f)) {
+                        (Some(pr), Some(pf)) => (cur_r, cur_f) = (pr, pf),
+                        _ => break 'walk,
+                    }
+                },
+            };
+            let blocked = self.rev.tree.edge_blocked(next_r).unwrap_or(false);
+            let Ok(f) = self.fwd.insert(self.rev.pos(next_r), parent_f, blocked) else {
+                break; // the arena is full: the branches not copied yet stay behind
+            };
+            (cur_r, cur_f) = (next_r, f);
+            copied = copied.saturating_add(1);
+            if Some(next_r) == goal_r {
+                goal_f = Some(f);
+            }
+        }
+        meter.charge(units(copied).saturating_mul(4));
+        match (goal_f, self.goal.as_mut()) {
+            (Some(g), Some(goal)) => {
+                goal.node = Some(g);
+                true
+            }
+            _ => {
+                // Not reached (the caller made room for the trunk, so this is defensive): the
+                // reverse tree goes back to its root at the goal and keeps growing.
+                if let Some(r) = goal_r {
+                    let _ = self.rev.tree.set_root(r);
+                }
+                false
+            }
+        }
     }
 }

@@ -271,6 +271,24 @@ impl<const N: usize> Tree<N> {
         (p != NONE).then_some(NodeId(p))
     }
 
+    /// The first child of a node (the most recently attached), if any.
+    pub fn first_child(&self, id: NodeId) -> Option<NodeId> {
+        if !self.contains(id) {
+            return None;
+        }
+        let c = rd_link(&self.first_child, id.index());
+        (c != NONE).then_some(NodeId(c))
+    }
+
+    /// The next sibling of a node in its parent's child list, if any.
+    pub fn next_sibling(&self, id: NodeId) -> Option<NodeId> {
+        if !self.contains(id) {
+            return None;
+        }
+        let s = rd_link(&self.next_sibling, id.index());
+        (s != NONE).then_some(NodeId(s))
+    }
+
     /// Whether the edge from the node's parent is marked as crossing a dynamic obstacle.
     pub fn edge_blocked(&self, id: NodeId) -> Option<bool> {
         self.contains(id)

@@ -124,15 +124,29 @@ fn planner_on<'s, M: Metric, const NN: usize, const BB: usize>(
 fn meet_and_graft_make_one_tree_with_the_goal() {
     let s = &builtin::BUG_TRAP;
     let mut met = 0;
-    for seed in 1..=6 {
+    let mut whole = 0;
+    for (seed, keep) in (1..=6).flat_map(|seed| [(seed, false), (seed, true)]) {
         let mut storage = Box::new(Storage::<N, B>::new());
-        let cfg = Config::am_rrt(MetricKind::Euclidean).with_bidirectional(true);
+        let cfg = Config::am_rrt(MetricKind::Euclidean)
+            .with_bidirectional(true)
+            .with_reverse_branches(keep);
         let mut p = planner_on(&mut storage, s, Euclidean, cfg, seed);
         let clock = clock();
         p.set_goal(s.goals[0]).unwrap();
         assert!(p.searching_backwards());
         let mut calls = 0;
-        while !p.plan(&clock, s.start).unwrap().goal_in_tree {
+        let mut before = (0, 0);
+        loop {
+            let pr = p.plan(&clock, s.start).unwrap();
+            if pr.goal_in_tree {
+                // Keeping the branches: the whole reverse tree joined (room permitting).
+                if keep && p.stats().met && !pr.tree_full {
+                    assert!(pr.nodes >= before.0 + before.1, "{before:?} -> {}", pr.nodes);
+                    whole += 1;
+                }
+                break;
+            }
+            before = (pr.nodes, pr.reverse_nodes);
             calls += 1;
             assert!(calls < 500, "seed {seed}: no meet");
         }
@@ -152,7 +166,8 @@ fn meet_and_graft_make_one_tree_with_the_goal() {
         met += usize::from(p.stats().met);
     }
     // In the bug trap the goal joins through the reverse tree most of the time.
-    assert!(met >= 4, "met {met} of 6");
+    assert!(met >= 8, "met {met} of 12");
+    assert!(whole >= 3, "whole reverse trees joined: {whole}");
 }
 
 #[test]

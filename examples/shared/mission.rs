@@ -11,8 +11,9 @@ use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
-/// Two trees of 1024 nodes with 256 index buckets each: about 76 KiB of RAM.
-pub type MissionStorage = Storage<1024, 256>;
+/// Two trees of 2,048 nodes with 256 index buckets each: 90,288 bytes (all zero when
+/// empty, so a `static` of it lands in `.bss`). The firmware's one planner storage.
+pub type MissionStorage = Storage<2048, 256>;
 
 /// What the mission measured.
 pub struct Mission {

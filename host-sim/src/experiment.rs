@@ -51,6 +51,8 @@ pub struct ExperimentArgs {
     pub jobs: Option<usize>,
     /// Reference-style rewiring budgets.
     pub faithful: bool,
+    /// Keep the reverse tree's branches at the meet (`Config::keep_reverse_branches`).
+    pub keep_reverse_branches: bool,
     /// Stop runs once the goal is in the tree.
     pub search_only: bool,
     /// Anytime measurement budget in ms (0: none).
@@ -291,6 +293,11 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
     }
     if let Some(t) = args.t_exp {
         planners.iter_mut().for_each(|c| c.t_exp = t);
+    }
+    if args.keep_reverse_branches {
+        planners
+            .iter_mut()
+            .for_each(|c| c.keep_reverse_branches = true);
     }
     std::fs::create_dir_all(&args.out)?;
     let jobs = args

@@ -95,6 +95,9 @@ enum Command {
         /// Rewiring as the reference (every expansion spends its full t_root/t_goal).
         #[arg(long)]
         faithful: bool,
+        /// Keep the reverse tree's branches when the trees meet (the paper keeps its trunk).
+        #[arg(long)]
+        keep_reverse_branches: bool,
         /// Diffusion table element type.
         #[arg(long, value_enum, default_value = "i16")]
         table_kind: KindArg,
@@ -292,6 +295,7 @@ fn main() -> Result<()> {
             seed,
             jobs,
             faithful,
+            keep_reverse_branches,
             table_kind,
             coarsen,
             max_bytes,
@@ -311,6 +315,7 @@ fn main() -> Result<()> {
                 seed,
                 jobs,
                 faithful,
+                keep_reverse_branches,
                 search_only,
                 anytime_ms,
                 table: TableOptions {

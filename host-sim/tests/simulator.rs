@@ -77,6 +77,7 @@ fn the_experiment_writes_one_row_per_run() {
         seed: 1,
         jobs: Some(2),
         faithful: false,
+        keep_reverse_branches: true,
         search_only: false,
         anytime_ms: 20,
         table: TableOptions::default(),

@@ -156,6 +156,7 @@ fn run_with<M: Metric>(
     cfg.t_exp = Duration::from_micros(1 + b.u16() as u64 * 4);
     cfg.max_work_per_call = 2_000 + b.u16() as u32 * 2;
     cfg.max_expansions_per_call = 1 + b.u8() as u32 * 4;
+    cfg.keep_reverse_branches = b.u8() & 1 == 1;
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
