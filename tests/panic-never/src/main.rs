@@ -140,6 +140,14 @@ fn main() -> ! {
     let d = Deadline::after(&clock, black_box(Duration::MAX));
     sink ^= d.expired(&clock) as u32;
     sink ^= clock.duration(black_box(u64::MAX)).subsec_nanos();
+    // The Cortex-M clocks, on the real peripherals.
+    if let Some(mut cp) = cortex_m::Peripherals::take() {
+        let dwt = bi_am_rrt::cortex::DwtClock::start(&mut cp.DCB, &mut cp.DWT, black_box(0));
+        sink ^= dwt.now() as u32 ^ dwt.ticks(black_box(Duration::MAX)) as u32;
+        let st = bi_am_rrt::cortex::SysTickClock::start(cp.SYST, black_box(168_000_000));
+        sink ^= st.now() as u32;
+        bi_am_rrt::cortex::on_systick_wrap();
+    }
     black_box(sink);
     loop {
         black_box(());
