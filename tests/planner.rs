@@ -531,3 +531,17 @@ fn a_goal_sequence_reuses_the_tree() {
         }
     }
 }
+
+/// Issue 8: two 2,048-node trees took 152,684 bytes (37 per node) and overflowed a 128 KiB
+/// chip. The layout is now 21 bytes per node per tree plus a fixed part (bucket heads and
+/// bounded sweep queues) that does not grow with `N`.
+#[test]
+fn regression_storage_fits_4096_nodes_in_96_kib() {
+    use core::mem::size_of;
+    let per_tree = |total: usize, n: usize| total / 2 - 21 * n;
+    let s2048 = size_of::<Storage<2048, 256>>();
+    let s1024 = size_of::<Storage<1024, 256>>();
+    assert!(s2048 <= 2 * (21 * 2048 + 2_200), "{s2048} bytes");
+    assert_eq!(per_tree(s2048, 2048), per_tree(s1024, 1024), "the fixed part grows with N");
+    assert!(s2048 + 8 * 1024 <= 96 * 1024, "{s2048} bytes leave no room for a stack");
+}

@@ -929,6 +929,54 @@ mod tests {
         );
     }
 
+    /// Issue 8: a coarse table gave cells coordinates from across a wall. With pieces, the
+    /// cells on either side of a wall inside one block read different entries, and the table
+    /// is far closer to full precision than the uniform one of the same block side.
+    #[test]
+    fn regression_piece_tables_never_read_across_a_wall() {
+        use bi_am_rrt::Metric;
+        // A wall along column 9 with a gap at the bottom: blocks of 4 straddle it.
+        let g = OwnedGrid::from_fn(24, 24, 1.0, |c, r| c == 9 && r < 21).unwrap();
+        let graph = GridGraph::build(&g.grid());
+        let map = diffusion_map(&graph, &Options::default()).unwrap();
+        let pieces = Pieces::of(&graph, 4);
+        let cell = |c: u32, r: u32| (r * 24 + c) as usize;
+        // Rows 0-19: blocks the wall splits (rows 20-23 hold the gap: one piece there).
+        for r in 0..20 {
+            assert_ne!(pieces.piece[cell(8, r)], pieces.piece[cell(10, r)], "row {r}");
+            assert_eq!(pieces.piece[cell(9, r)], 0, "the wall has no entry");
+        }
+        assert_eq!(pieces.piece[cell(8, 22)], pieces.piece[cell(10, 22)]);
+        let err = |layout| {
+            let t = table_bytes(
+                &graph,
+                &map,
+                &TableOptions {
+                    coarsen: 4,
+                    layout,
+                    max_bytes: 0,
+                    ..TableOptions::default()
+                },
+            )
+            .unwrap();
+            let t = bi_am_rrt::DiffusionTable::new(&t).unwrap();
+            let mut worst = 0.0f64;
+            for a in (0..graph.len() as u32).step_by(3) {
+                for b in (0..graph.len() as u32).step_by(5) {
+                    let got = t.distance(graph.position(a), graph.position(b)) as f64;
+                    worst = worst.max((got - map.distance(a, b)).abs());
+                }
+            }
+            worst
+        };
+        let (pieces_err, uniform_err) = (err(TableLayout::Pieces), err(TableLayout::Uniform));
+        assert!(pieces_err * 2.0 < uniform_err, "{pieces_err} vs {uniform_err}");
+        // Refining within a budget only lowers the spread.
+        let refined = pieces.refine(&map, &graph, 0.0);
+        assert!(refined.max_spread(&map) <= pieces.max_spread(&map));
+        assert!(refined.members.len() > pieces.members.len());
+    }
+
     #[test]
     fn automatic_coarsening_fits_the_budget() {
         let o = TableOptions {
