@@ -139,7 +139,9 @@ fn office_mission(storage: &mut MissionStorage, times: &mut [u16], clock: &SysTi
         let mut bytes = [0u8; 8];
         bytes[..4].copy_from_slice(&agent.x.to_bits().to_le_bytes());
         bytes[4..].copy_from_slice(&agent.y.to_bits().to_le_bytes());
-        trail = bytes.iter().fold(trail, |h, &b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
+        trail = bytes
+            .iter()
+            .fold(trail, |h, &b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
         last = clock.now();
     });
     let Ok(r) = result else {

@@ -83,7 +83,9 @@ impl SysTickClock {
             }
             let wraps = u64::from(wraps).saturating_add(u64::from(pending));
             let within = u64::from(RELOAD.saturating_sub(value & RELOAD));
-            return wraps.saturating_mul(u64::from(RELOAD) + 1).saturating_add(within);
+            return wraps
+                .saturating_mul(u64::from(RELOAD) + 1)
+                .saturating_add(within);
         }
     }
 }

@@ -177,7 +177,15 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         }
         let b = self.bucket(p);
         let first = rd_link(&self.head, b);
-        wr(&mut self.next, i, if first == NONE { END } else { first.wrapping_add(1) });
+        wr(
+            &mut self.next,
+            i,
+            if first == NONE {
+                END
+            } else {
+                first.wrapping_add(1)
+            },
+        );
         wr_link(&mut self.head, b, id.0);
         self.len = self.len.saturating_add(1);
         Ok(())
@@ -211,7 +219,15 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         if prev == NONE {
             wr_link(&mut self.head, b, after);
         } else {
-            wr(&mut self.next, prev as usize, if after == NONE { END } else { after.wrapping_add(1) });
+            wr(
+                &mut self.next,
+                prev as usize,
+                if after == NONE {
+                    END
+                } else {
+                    after.wrapping_add(1)
+                },
+            );
         }
         wr(&mut self.next, i, OUT);
         self.len = self.len.saturating_sub(1);

@@ -452,7 +452,11 @@ impl<'a> DiffusionTable<'a> {
         };
         // Version 2: the cell's piece within its block, then the block's first entry.
         let byte = *self.payload.get(parts.nibbles_at.checked_add(cell / 2)?)?;
-        let piece = if cell % 2 == 0 { byte & 0x0f } else { byte >> 4 };
+        let piece = if cell.is_multiple_of(2) {
+            byte & 0x0f
+        } else {
+            byte >> 4
+        };
         if piece == 0 {
             return None;
         }
@@ -460,9 +464,13 @@ impl<'a> DiffusionTable<'a> {
             .checked_div(parts.block)?
             .checked_mul(parts.block_cols)?
             .checked_add(c.checked_div(parts.block)?)?;
-        let at = parts.firsts_at.checked_add(usize::try_from(block).ok()?.checked_mul(2)?)?;
+        let at = parts
+            .firsts_at
+            .checked_add(usize::try_from(block).ok()?.checked_mul(2)?)?;
         let first = le_u16(self.payload, at)?;
-        usize::from(first).checked_add(usize::from(piece))?.checked_sub(1)
+        usize::from(first)
+            .checked_add(usize::from(piece))?
+            .checked_sub(1)
     }
 
     /// Reads coordinate `d` of `cell` as stored (before scaling); `None` if unreachable.
@@ -575,7 +583,10 @@ fn put_entry(
 
 /// Splits `out` into header and payload for a table of `header`'s size, after checking the
 /// fields every writer needs.
-fn table_parts<'o>(header: &TableHeader, out: &'o mut [u8]) -> Option<(&'o mut [u8], &'o mut [u8])> {
+fn table_parts<'o>(
+    header: &TableHeader,
+    out: &'o mut [u8],
+) -> Option<(&'o mut [u8], &'o mut [u8])> {
     let k = header.dims as usize;
     if k == 0 || k > TABLE_MAX_DIMS || !(header.scale.is_finite() && header.scale > 0.0) {
         return None;
@@ -638,9 +649,14 @@ where
     for br in 0..rows.div_ceil(b) {
         for bc in 0..parts.block_cols {
             let block = br.checked_mul(parts.block_cols)?.checked_add(bc)?;
-            let at = parts.firsts_at.checked_add(usize::try_from(block).ok()?.checked_mul(2)?)?;
+            let at = parts
+                .firsts_at
+                .checked_add(usize::try_from(block).ok()?.checked_mul(2)?)?;
             let first = u16::try_from(next).ok()?;
-            copy_bytes(payload.get_mut(at..at.checked_add(2)?)?, &first.to_le_bytes());
+            copy_bytes(
+                payload.get_mut(at..at.checked_add(2)?)?,
+                &first.to_le_bytes(),
+            );
             let mut most = 0u8;
             for r in br.checked_mul(b)?..br.checked_add(1)?.checked_mul(b)?.min(rows) {
                 for c in bc.checked_mul(b)?..bc.checked_add(1)?.checked_mul(b)?.min(cols) {
@@ -651,7 +667,7 @@ where
                     most = most.max(q);
                     let cell = usize::try_from(r.checked_mul(cols)?.checked_add(c)?).ok()?;
                     let byte = payload.get_mut(parts.nibbles_at.checked_add(cell / 2)?)?;
-                    *byte = if cell % 2 == 0 {
+                    *byte = if cell.is_multiple_of(2) {
                         (*byte & 0xf0) | q
                     } else {
                         (*byte & 0x0f) | (q << 4)

@@ -849,7 +849,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// copy takes the trunk (and the goal) first, then the branches while the arena has room.
     /// The walk needs no stack: it climbs the copy in step with the original. The caller has
     /// made room for the trunk.
-    fn graft_whole<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {
+    fn graft_whole<C: Clock + ?Sized>(
+        &mut self,
+        a: NodeId,
+        b: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> bool {
         let goal_r = self.rev.tree.root();
         meter.charge(units(N / 8));
         if self.rev.tree.set_root(b).is_err() {

@@ -110,7 +110,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 self.try_rewire(env, x_near, x1, meter);
                 // Seen only once queued: a node refused by the full (bounded) queue can still
                 // be queued later in the sweep, from another neighbour.
-                if !self.tree.marked(x_near, Mark::Root) && self.root_queue.push_back(x_near).is_ok() {
+                if !self.tree.marked(x_near, Mark::Root)
+                    && self.root_queue.push_back(x_near).is_ok()
+                {
                     self.tree.mark(x_near, Mark::Root);
                 }
             }

@@ -595,3 +595,59 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             .find(|&id| env.free(self.pos(id), x, meter))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use core::cell::Cell;
+
+    use super::*;
+    use crate::clock::FakeClock;
+    use crate::map::{OccupancyGrid, pack_grid};
+
+    /// A non-Euclidean metric (so `nearest` may scan the tree) that counts its evaluations.
+    struct Counting(Cell<u32>);
+
+    impl Metric for Counting {
+        fn distance(&self, a: Point, b: Point) -> f32 {
+            self.0.set(self.0.get() + 1);
+            a.dist(b)
+        }
+    }
+
+    /// Issue 8: an expansion in progress was not checked against the call's deadline; the
+    /// metric nearest scan alone read all 2,048 nodes (about 2 ms on the chip) after it.
+    #[test]
+    fn regression_metric_nearest_scan_stops_at_the_deadline() {
+        // A wall at column 10 hides the query point from every node.
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        pack_grid(&mut bits, 20, 20, |c, _| c == 10).unwrap();
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
+        let mut store = TreeStore::<512, 64>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        store.reset(Point::new(0.5, 0.5));
+        let root = NodeId(0);
+        for i in 1..500u16 {
+            let p = Point::new(0.5 + (i % 9) as f32, 0.5 + (i / 9) as f32 * 0.03);
+            store.insert(p, root, false).unwrap();
+        }
+        let cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
+        let clock = FakeClock::new(1_000_000_000);
+        let meter = Meter::new(&clock);
+        let q = Point::new(15.5, 5.5);
+        for (call, most) in [(Deadline::NEVER, 500), (Deadline::from_ticks(0, 0), 64)] {
+            let metric = Counting(Cell::new(0));
+            let env = Env {
+                map: &map,
+                metric: &metric,
+                cfg: &cfg,
+                call,
+            };
+            let found = store.nearest(&env, q, &meter);
+            assert_eq!(found.is_some(), call == Deadline::NEVER);
+            assert!(metric.0.get() <= most, "{} evaluations", metric.0.get());
+            if call == Deadline::NEVER {
+                assert_eq!(metric.0.get(), 500, "the whole tree is scanned");
+            }
+        }
+    }
+}

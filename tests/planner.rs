@@ -141,7 +141,11 @@ fn meet_and_graft_make_one_tree_with_the_goal() {
             if pr.goal_in_tree {
                 // Keeping the branches: the whole reverse tree joined (room permitting).
                 if keep && p.stats().met && !pr.tree_full {
-                    assert!(pr.nodes >= before.0 + before.1, "{before:?} -> {}", pr.nodes);
+                    assert!(
+                        pr.nodes >= before.0 + before.1,
+                        "{before:?} -> {}",
+                        pr.nodes
+                    );
                     whole += 1;
                 }
                 break;
@@ -542,7 +546,14 @@ fn regression_storage_fits_4096_nodes_in_96_kib() {
     let s2048 = size_of::<Storage<2048, 256>>();
     let s1024 = size_of::<Storage<1024, 256>>();
     assert!(s2048 <= 2 * (21 * 2048 + 2_200), "{s2048} bytes");
-    assert_eq!(per_tree(s2048, 2048), per_tree(s1024, 1024), "the fixed part grows with N");
+    assert_eq!(
+        per_tree(s2048, 2048),
+        per_tree(s1024, 1024),
+        "the fixed part grows with N"
+    );
     // The office firmware measured a 3.6 KiB stack high-water mark (CI checks the real total).
-    assert!(s2048 + 4 * 1024 <= 96 * 1024, "{s2048} bytes leave no room for a stack");
+    assert!(
+        s2048 + 4 * 1024 <= 96 * 1024,
+        "{s2048} bytes leave no room for a stack"
+    );
 }

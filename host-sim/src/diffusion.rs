@@ -943,7 +943,11 @@ mod tests {
         let cell = |c: u32, r: u32| (r * 24 + c) as usize;
         // Rows 0-19: blocks the wall splits (rows 20-23 hold the gap: one piece there).
         for r in 0..20 {
-            assert_ne!(pieces.piece[cell(8, r)], pieces.piece[cell(10, r)], "row {r}");
+            assert_ne!(
+                pieces.piece[cell(8, r)],
+                pieces.piece[cell(10, r)],
+                "row {r}"
+            );
             assert_eq!(pieces.piece[cell(9, r)], 0, "the wall has no entry");
         }
         assert_eq!(pieces.piece[cell(8, 22)], pieces.piece[cell(10, 22)]);
@@ -970,7 +974,10 @@ mod tests {
             worst
         };
         let (pieces_err, uniform_err) = (err(TableLayout::Pieces), err(TableLayout::Uniform));
-        assert!(pieces_err * 2.0 < uniform_err, "{pieces_err} vs {uniform_err}");
+        assert!(
+            pieces_err * 2.0 < uniform_err,
+            "{pieces_err} vs {uniform_err}"
+        );
         // Refining within a budget only lowers the spread.
         let refined = pieces.refine(&map, &graph, 0.0);
         assert!(refined.max_spread(&map) <= pieces.max_spread(&map));
