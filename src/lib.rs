@@ -70,7 +70,7 @@
 //! - `defmt`: `defmt::Format` for the public types (for firmware logging).
 //! - `cortex-m`: the `cortex` module, real [`clock::Clock`]s on SysTick and on the DWT cycle
 //!   counter (Cortex-M3 and up).
-//! - `embassy-time`: [`clock::EmbassyClock`], a [`clock::Clock`] on `embassy_time::Instant`
+//! - `embassy-time`: `clock::EmbassyClock`, a [`clock::Clock`] on `embassy_time::Instant`
 //!   for firmware built on Embassy (the application provides the time driver).
 //!
 //! ## Randomness on the chip

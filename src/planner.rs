@@ -414,10 +414,14 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     ///
     /// # Bounded work
     ///
-    /// A call stops expanding when `t_exp` has passed on `clock`, after
-    /// `max_expansions_per_call` expansions, or once `max_work_per_call` work units are done,
-    /// whichever comes first; every rewiring phase checks the same limits before each node it
-    /// visits. So whatever the clock (even one that never advances) a call does at most
+    /// `t_exp` counts from the moment of the call: anchoring and following the agent (each at
+    /// most one O(N) re-rooting) spend it first. A call stops expanding when `t_exp` has
+    /// passed on `clock`, after `max_expansions_per_call` expansions, or once
+    /// `max_work_per_call` work units are done, whichever comes first; every rewiring phase
+    /// checks the same limits before each node it visits, and the metric nearest scan every 64
+    /// nodes. On a real clock a call therefore overruns `t_exp` by at most the rest of one
+    /// expansion step: measured on a Cortex-M4F model (`examples/firmware.rs`, office,
+    /// 2 x 2,048 nodes, 150 ms), 454 us at worst, median call 150.10 ms. So whatever the clock (even one that never advances) a call does at most
     /// `max_work_per_call + W_step` units, where `W_step` is the most work between two checks:
     /// one expansion or one rewiring visit. Both are `O(N + e_max / cell)`: an expansion does
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
