@@ -70,6 +70,17 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
                 kept.push(i);
             }
         }
+        // Removal walks the singly linked bucket of the position given: every other kept
+        // node goes, and must be found there.
+        let mut removed = Vec::new();
+        for (k, &i) in kept.iter().enumerate() {
+            if k % 2 == 1 {
+                assert!(idx.remove(NodeId(i as u16), pts[i]).is_ok(), "remove {i}");
+                removed.push(i);
+            }
+        }
+        kept.retain(|i| !removed.contains(i));
+        assert_eq!(idx.len(), kept.len());
         let q = probe(3);
         let found = idx.nearest(q, &pts).map(|(_, d2)| d2);
         let oracle = kept
