@@ -17,8 +17,9 @@
 //! joins, to the node `Nearest` the goal). If the agent is within `e_max / 10` of the root and
 //! the path's first edge is free, the tree is re-rooted at the path's next node (an O(N) cost
 //! update, done before the expansions so that it spends the budget instead of overrunning it,
-//! and so that this call's rewiring already works from the new root). The root is the waypoint
-//! returned. (The agent must also see that node over a free segment; otherwise it first
+//! and so that this call's rewiring already works from the new root; when that finds no next
+//! node, it is tried once more after the expansions, which may have joined the goal). The root
+//! is the waypoint returned. (The agent must also see that node over a free segment; otherwise it first
 //! finishes its way to the root, so it never cuts a corner.)
 //!
 //! # The waypoint rule (safety)
@@ -415,13 +416,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// # Bounded work
     ///
     /// `t_exp` counts from the moment of the call: anchoring and following the agent (each at
-    /// most one O(N) re-rooting) spend it first. A call stops expanding when `t_exp` has
+    /// most one O(N) re-rooting) spend it first (following is retried once after the
+    /// expansions when it could not advance before them). A call stops expanding when `t_exp` has
     /// passed on `clock`, after `max_expansions_per_call` expansions, or once
     /// `max_work_per_call` work units are done, whichever comes first; every rewiring phase
     /// checks the same limits before each node it visits, and the metric nearest scan every 64
     /// nodes. On a real clock a call therefore overruns `t_exp` by at most the rest of one
-    /// expansion step: measured on a Cortex-M4F model (`examples/firmware.rs`, office,
-    /// 2 x 2,048 nodes, 150 ms), 454 us at worst, median call 150.10 ms. So whatever the clock (even one that never advances) a call does at most
+    /// expansion step (plus one re-rooting when following is retried): measured on a
+    /// Cortex-M4F model (`examples/firmware.rs`, office, 2 x 2,048 nodes, 150 ms), 474 us at
+    /// worst, median call 150.10 ms. And whatever the clock (even one that never advances) a
+    /// call does at most
     /// `max_work_per_call + W_step` units, where `W_step` is the most work between two checks:
     /// one expansion or one rewiring visit. Both are `O(N + e_max / cell)`: an expansion does
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
@@ -457,8 +461,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !trapped {
             self.anchor(agent, &meter);
         }
-        let advanced = !trapped && self.follow(agent, &meter);
+        let mut advanced = !trapped && self.follow(agent, &meter);
         let expansions = self.expand_for(&meter);
+        // The path may only now lead somewhere (the goal joined in this call, or rewiring
+        // cleared the first edge): try once more rather than hold the agent for a call.
+        if !advanced && !trapped {
+            advanced = self.follow(agent, &meter);
+        }
         Ok(self.progress(Some(agent), expansions, advanced, &meter))
     }
 
