@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use bi_am_rrt::metric::ElementKind;
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_sim::bake;
 use host_sim::clock::ClockKind;
 use host_sim::diffusion::{Options, TableLayout, TableOptions};
@@ -98,20 +98,8 @@ enum Command {
         /// Keep the reverse tree's branches when the trees meet (the paper keeps its trunk).
         #[arg(long)]
         keep_reverse_branches: bool,
-        /// Diffusion table element type.
-        #[arg(long, value_enum, default_value = "i16")]
-        table_kind: KindArg,
-        /// Diffusion table: map cells per table cell along each axis (0: smallest that fits
-        /// --max-bytes).
-        #[arg(long, default_value_t = 0)]
-        coarsen: u16,
-        /// Diffusion table: size budget for --coarsen 0.
-        #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
-        max_bytes: usize,
-        /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
-        /// never across a wall) or `uniform` (one entry per block, the format-1 table).
-        #[arg(long, value_enum, default_value = "pieces")]
-        layout: TableLayout,
+        #[command(flatten)]
+        table: TableArgs,
         /// Planning time per call in ms (default: the paper's 150).
         #[arg(long)]
         t_exp_ms: Option<u64>,
@@ -174,19 +162,8 @@ enum Command {
         /// Output file.
         #[arg(long)]
         out: PathBuf,
-        /// Diffusion: element type.
-        #[arg(long, value_enum, default_value = "i16")]
-        kind: KindArg,
-        /// Diffusion: map cells per table cell along each axis (0: smallest that fits --max-bytes).
-        #[arg(long, default_value_t = 0)]
-        coarsen: u16,
-        /// Diffusion: size budget for --coarsen 0.
-        #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
-        max_bytes: usize,
-        /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
-        /// never across a wall) or `uniform` (one entry per block, the format-1 table).
-        #[arg(long, value_enum, default_value = "pieces")]
-        layout: TableLayout,
+        #[command(flatten)]
+        table: TableArgs,
         /// Also write Rust source with a `static` table to this file.
         #[arg(long)]
         rust: Option<PathBuf>,
@@ -206,15 +183,8 @@ enum Command {
         /// Output folder (created): NAME.grid, NAME.table, NAME.rs.
         #[arg(long)]
         out: PathBuf,
-        /// Diffusion table: map cells per block along each axis (0: smallest that fits).
-        #[arg(long, default_value_t = 0)]
-        coarsen: u16,
-        /// Diffusion table: size budget for --coarsen 0.
-        #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
-        max_bytes: usize,
-        /// Diffusion table layout.
-        #[arg(long, value_enum, default_value = "pieces")]
-        layout: TableLayout,
+        #[command(flatten)]
+        table: TableArgs,
     },
     /// Measure how the expansion rate changes as the tree grows (no motion, wall clock).
     Growth {
@@ -246,6 +216,36 @@ fn kind_of(k: KindArg) -> ElementKind {
     match k {
         KindArg::I16 => ElementKind::I16,
         KindArg::F32 => ElementKind::F32,
+    }
+}
+
+/// The diffusion table options shared by `experiment`, `bake` and `export`.
+#[derive(Args, Clone, Copy, Debug)]
+struct TableArgs {
+    /// Diffusion table element type.
+    #[arg(long, value_enum, default_value = "i16")]
+    table_kind: KindArg,
+    /// Diffusion table: map cells per block along each axis (0: the block side that fits
+    /// --max-bytes with the smallest error).
+    #[arg(long, default_value_t = 0)]
+    coarsen: u16,
+    /// Diffusion table: size budget in bytes when --coarsen is 0.
+    #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
+    max_bytes: usize,
+    /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
+    /// never across a wall) or `uniform` (one entry per block, the format-1 table).
+    #[arg(long, value_enum, default_value = "pieces")]
+    layout: TableLayout,
+}
+
+impl TableArgs {
+    fn options(self) -> TableOptions {
+        TableOptions {
+            kind: kind_of(self.table_kind),
+            coarsen: self.coarsen,
+            max_bytes: self.max_bytes,
+            layout: self.layout,
+        }
     }
 }
 
@@ -296,10 +296,7 @@ fn main() -> Result<()> {
             jobs,
             faithful,
             keep_reverse_branches,
-            table_kind,
-            coarsen,
-            max_bytes,
-            layout,
+            table,
             t_exp_ms,
             search_only,
             anytime_ms,
@@ -318,12 +315,7 @@ fn main() -> Result<()> {
                 keep_reverse_branches,
                 search_only,
                 anytime_ms,
-                table: TableOptions {
-                    kind: kind_of(table_kind),
-                    coarsen,
-                    max_bytes,
-                    layout,
-                },
+                table: table.options(),
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
             })
@@ -427,22 +419,11 @@ fn main() -> Result<()> {
             scenarios,
             scenario,
             out,
-            coarsen,
-            max_bytes,
-            layout,
+            table,
         } => {
             let sc = maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0);
             let t0 = Instant::now();
-            let ex = bake::export_flash(
-                &sc,
-                &TableOptions {
-                    kind: bi_am_rrt::metric::ElementKind::I16,
-                    coarsen,
-                    max_bytes,
-                    layout,
-                },
-                &out,
-            )?;
+            let ex = bake::export_flash(&sc, &table.options(), &out)?;
             let e = &ex.error;
             println!(
                 "{}: grid {} bytes, table {} bytes (max error {:.3e} = {:.2} % of the largest distance {:.3e} over {} pairs) in {:.1} s -> {}",
@@ -465,10 +446,7 @@ fn main() -> Result<()> {
             map,
             metric,
             out,
-            kind,
-            coarsen,
-            max_bytes,
-            layout,
+            table,
             rust,
             all_pairs,
         } => {
@@ -476,17 +454,7 @@ fn main() -> Result<()> {
             let t0 = Instant::now();
             match metric {
                 MetricArg::Diffusion => {
-                    let kind = kind_of(kind);
-                    let baked = bake::bake_diffusion(
-                        &grid,
-                        &Options::default(),
-                        &TableOptions {
-                            kind,
-                            coarsen,
-                            max_bytes,
-                            layout,
-                        },
-                    )?;
+                    let baked = bake::bake_diffusion(&grid, &Options::default(), &table.options())?;
                     let secs = t0.elapsed().as_secs_f64();
                     bake::write_file(&out, &baked.table)?;
                     let r = &baked.map.report;

@@ -302,3 +302,33 @@ fn stress_runs_are_safe() {
     assert!(sum.moves > 100 && sum.obstacles > 20, "{sum:?}");
     assert_eq!((sum.unsafe_moves, sum.panics), (0, 0), "{rows:#?}");
 }
+
+/// Issue 8: there was no tool to turn a map into flash data. `export` writes the packed grid,
+/// the table and Rust source holding both; what it writes reads back as the same map.
+#[test]
+fn export_writes_a_grid_a_table_and_rust_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = maps::builtin_by_name("maze").unwrap();
+    let ex = host_sim::bake::export_flash(&sc, &TableOptions::default(), dir.path()).unwrap();
+    let grid = std::fs::read(dir.path().join("maze.grid")).unwrap();
+    let table = std::fs::read(dir.path().join("maze.table")).unwrap();
+    assert_eq!(grid, sc.map.bits);
+    assert_eq!((ex.grid_bytes, ex.table_bytes), (grid.len(), table.len()));
+    let t = bi_am_rrt::DiffusionTable::new(&table).unwrap();
+    assert!(t.covers(sc.start));
+    assert!(table.len() <= host_sim::diffusion::DEFAULT_MAX_BYTES);
+    let src = std::fs::read_to_string(&ex.source).unwrap();
+    for item in [
+        "pub static GRID: [u8; ",
+        "pub static TABLE: [u8; ",
+        "pub const GOALS: [(f32, f32); ",
+        "pub const START: (f32, f32) = ",
+    ] {
+        assert!(src.contains(item), "{item}");
+    }
+    assert!(
+        ex.error.max_abs <= 0.02 * ex.error.max_distance,
+        "{:?}",
+        ex.error
+    );
+}
