@@ -73,7 +73,11 @@ pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
     spec.split(',')
         .map(|name| {
             let name = name.trim();
-            Config::from_name(name).with_context(|| {
+            // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
+            let found = Config::table1()
+                .into_iter()
+                .find(|c| c.name().to_string().eq_ignore_ascii_case(name));
+            found.with_context(|| {
                 let all: Vec<String> = Config::table1()
                     .iter()
                     .map(|c| c.name().to_string())

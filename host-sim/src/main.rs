@@ -79,7 +79,8 @@ enum Command {
         /// `all` or a comma-separated list of Table 1 names.
         #[arg(long, default_value = "all")]
         planners: String,
-        #[arg(long, default_value_t = 25)]
+        /// Runs per planner and scenario (seeds seed .. seed + repeats - 1).
+        #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
         repeats: u32,
         #[arg(long, value_enum, default_value = "wall")]
         clock: ClockKind,
@@ -273,7 +274,8 @@ fn main() -> Result<()> {
             let sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
                 (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
-                (None, _) => maps::builtin_by_name(&builtin)?,
+                (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
+                (None, None) => maps::builtin_by_name(&builtin)?,
             };
             run::run(&RunArgs {
                 scenario: sc,

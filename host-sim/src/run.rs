@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use bi_am_rrt::agent::Protocol;
-use bi_am_rrt::{Circle, Config, Point};
+use bi_am_rrt::{Circle, Point};
 use std::time::Instant;
 
 use crate::experiment::{Row, row};
@@ -57,8 +57,18 @@ use image::Rgb;
 
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
-    let cfg = Config::from_name(&args.planner)
-        .with_context(|| format!("unknown planner {:?}", args.planner))?;
+    let cfg = crate::experiment::parse_planners(&args.planner)?
+        .first()
+        .copied()
+        .context("no planner named")?;
+    if let Some(r) = args.obstacle {
+        let size = args.scenario.map.grid();
+        let most = 0.25 * size.width_m().min(size.height_m());
+        anyhow::ensure!(
+            r.is_finite() && r > 0.0 && r <= most,
+            "--obstacle {r}: the disc's radius must be above 0 and at most {most} m (a quarter of the map)"
+        );
+    }
     let prep = Prepared::new(args.scenario.clone());
     std::fs::create_dir_all(&args.out)?;
     let goals: Vec<usize> = if args.all_goals {
@@ -91,6 +101,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
                         ahead += w[0].dist(w[1]);
                         if ahead > 10.0 && p.goal().is_some_and(|g| w[1].dist(g) > r + 3.0) {
                             dropped = p.add_obstacle(Circle::new(w[1], r)).is_ok();
+                            if dropped {
+                                println!(
+                                    "dropped a disc of radius {r} m at ({:.1}, {:.1}) on the path",
+                                    w[1].x, w[1].y
+                                );
+                            }
                             break;
                         }
                     }

@@ -332,3 +332,36 @@ fn export_writes_a_grid_a_table_and_rust_source() {
         ex.error
     );
 }
+
+/// Issue 9's command-line hygiene: planner names in any case, unknown names listed, an
+/// obstacle radius out of range refused with the range (it was accepted and nothing dropped).
+#[test]
+fn regression_planner_names_and_obstacle_radius_are_checked() {
+    let p = experiment::parse_planners("bi-am-rrt*(d), rt-rrt*").unwrap();
+    assert_eq!(p[0].name().to_string(), "Bi-AM-RRT*(D)");
+    assert_eq!(p[1].name().to_string(), "RT-RRT*");
+    let e = experiment::parse_planners("AM-RRT*(X)")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("unknown planner") && e.contains("Bi-AM-RRT*(G)"),
+        "{e}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    for r in [-2.0, 0.0, 1000.0, f32::NAN] {
+        let args = host_sim::run::RunArgs {
+            scenario: maps::builtin_by_name("open").unwrap(),
+            planner: "Bi-AM-RRT*(E)".into(),
+            all_goals: false,
+            seed: 1,
+            clock: ClockKind::Virtual,
+            obstacle: Some(r),
+            out: dir.path().to_path_buf(),
+        };
+        let e = host_sim::run::run(&args).unwrap_err().to_string();
+        assert!(
+            e.contains("--obstacle") && e.contains("at most 10 m"),
+            "{e}"
+        );
+    }
+}
