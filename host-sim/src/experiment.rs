@@ -120,12 +120,27 @@ pub struct Summary {
     pub runs: usize,
     pub reached: usize,
     pub collisions: u32,
+    #[serde(serialize_with = "short")]
     pub search_time_median_s: Option<f64>,
+    #[serde(serialize_with = "short")]
     pub search_time_mean_s: Option<f64>,
+    #[serde(serialize_with = "short")]
     pub path_length_median_m: Option<f64>,
+    #[serde(serialize_with = "short")]
     pub path_length_mean_m: Option<f64>,
+    #[serde(serialize_with = "short")]
     pub nodes_at_goal_median: Option<f64>,
+    #[serde(serialize_with = "short")]
     pub anytime_cost_median_m: Option<f64>,
+}
+
+/// A statistic in the files at the precision of its `f32` inputs (shortest `f32` form:
+/// `68.88539`, not the `68.88539123535156` of its `f64` sum).
+fn short<S: serde::Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(x) => s.serialize_some(&(*x as f32)),
+        None => s.serialize_none(),
+    }
 }
 
 /// Median of a sample (`None` if empty).

@@ -59,6 +59,7 @@ enum Command {
         /// Random seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Clock: `wall` (real time, as the paper) or `virtual` (work-driven, repeatable).
         #[arg(long, value_enum, default_value = "wall")]
         clock: ClockKind,
         /// Drop a disc of this radius on the planned path once the agent moves (paper Fig. 7).
@@ -82,6 +83,7 @@ enum Command {
         /// Runs per planner and scenario (seeds seed .. seed + repeats - 1).
         #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
         repeats: u32,
+        /// Clock: `wall` (real time, as the paper) or `virtual` (work-driven, repeatable).
         #[arg(long, value_enum, default_value = "wall")]
         clock: ClockKind,
         /// Goal 1 only, or the whole goal sequence.
@@ -110,6 +112,7 @@ enum Command {
         /// Planning time for the "cost after 100 ms without moving" column (ms; 0: skip).
         #[arg(long, default_value_t = 100)]
         anytime_ms: u64,
+        /// Output folder (runs.csv, summary.csv).
         #[arg(long, default_value = "out/experiment")]
         out: PathBuf,
     },
@@ -158,6 +161,7 @@ enum Command {
         /// PNG map (mean-threshold rule), or `builtin:NAME`.
         #[arg(long)]
         map: String,
+        /// Metric to bake: `diffusion` (a table) or `geodesic` (the grid graph).
         #[arg(long, value_enum, default_value = "diffusion")]
         metric: MetricArg,
         /// Output file.
@@ -189,10 +193,13 @@ enum Command {
     },
     /// Measure how the expansion rate changes as the tree grows (no motion, wall clock).
     Growth {
+        /// Scenario file (TOML).
         #[arg(long)]
         scenarios: PathBuf,
+        /// Comma-separated scenario names (default: all in the file).
         #[arg(long, value_delimiter = ',')]
         maps: Option<Vec<String>>,
+        /// Comma-separated Table 1 names.
         #[arg(long, default_value = "Bi-AM-RRT*(D),Bi-AM-RRT*(E)")]
         planners: String,
         /// Seconds of planning per planner and mode.
@@ -201,13 +208,16 @@ enum Command {
         /// Length of one plan call (ms).
         #[arg(long, default_value_t = 50)]
         call_ms: u64,
+        /// First seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Output folder.
         #[arg(long, default_value = "out/growth")]
         out: PathBuf,
     },
     /// Measure wall nanoseconds per unit of planner work (to calibrate the virtual clock).
     Calibrate {
+        /// Runs (the median is reported).
         #[arg(long, default_value_t = 5)]
         repeats: u32,
     },
