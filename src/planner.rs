@@ -884,18 +884,27 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             // Down to the first child, or along to the next sibling (climbing as needed).
             let (next_r, parent_f) = match self.rev.tree.first_child(cur_r) {
                 Some(c) => (c, cur_f),
-                None => loop {
-                    if cur_r == b {
-                        break 'walk;
+                None => {
+                    // Climb (at most the tree's depth) to the first ancestor with a next sibling.
+                    let mut along = None;
+                    for _ in 0..self.rev.tree.len() {
+                        if cur_r == b {
+                            break;
+                        }
+                        if let Some(s) = self.rev.tree.next_sibling(cur_r) {
+                            along = Some((s, self.fwd.tree.parent(cur_f).unwrap_or(a)));
+                            break;
+                        }
+                        match (self.rev.tree.parent(cur_r), self.fwd.tree.parent(cur_f)) {
+                            (Some(pr), Some(pf)) => (cur_r, cur_f) = (pr, pf),
+                            _ => break,
+                        }
                     }
-                    if let Some(s) = self.rev.tree.next_sibling(cur_r) {
-                        break (s, self.fwd.tree.parent(cur_f).unwrap_or(a));
+                    match along {
+                        Some(next) => next,
+                        None => break 'walk,
                     }
-                    match (self.rev.tree.parent(cur_r), self.fwd.tree.parent(cur_f)) {
-                        (Some(pr), Some(pf)) => (cur_r, cur_f) = (pr, pf),
-                        _ => break 'walk,
-                    }
-                },
+                }
             };
             let blocked = self.rev.tree.edge_blocked(next_r).unwrap_or(false);
             let Ok(f) = self.fwd.insert(self.rev.pos(next_r), parent_f, blocked) else {
