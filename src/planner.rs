@@ -156,13 +156,15 @@ pub struct PathInfo {
 }
 
 /// Counters over the planner's life since the goal was set.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Stats {
     /// Clock tick at which the goal joined the forward tree.
     pub goal_found_at: Option<u64>,
     /// Forward tree size when the goal joined.
     pub nodes_at_goal: Option<usize>,
+    /// Length of the path to the goal when it joined (the first solution's cost).
+    pub first_cost: Option<f32>,
     /// Expansions of the forward tree since the goal was set.
     pub expansions: u64,
     /// Expansions of the reverse tree since the goal was set.
@@ -245,6 +247,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// The configuration.
     pub fn config(&self) -> &Config {
         &self.cfg
+    }
+
+    /// Changes the time budget `t_exp` of the next calls (a caller that knows how much time it
+    /// has this cycle). Refused, leaving it unchanged, when zero.
+    pub fn set_t_exp(&mut self, t_exp: core::time::Duration) -> Result<(), crate::error::ConfigError> {
+        if t_exp.is_zero() {
+            return Err(crate::error::ConfigError::TExp);
+        }
+        self.cfg.t_exp = t_exp;
+        Ok(())
     }
 
     /// The map with its dynamic obstacles.
@@ -740,6 +752,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if self.stats.goal_found_at.is_none() {
             self.stats.goal_found_at = Some(meter.now());
             self.stats.nodes_at_goal = Some(self.fwd.tree.len());
+            self.stats.first_cost = self
+                .goal_node()
+                .and_then(|g| self.fwd.tree.cost(g))
+                .map(|c| c.length);
         }
         self.fwd.restart_goal_sweep();
         if self.rev_goal.take().is_some() {

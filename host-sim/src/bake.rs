@@ -256,7 +256,7 @@ pub fn geodesic_costs(g: &GridGraph, samples: usize, all: bool) -> (f64, Option<
         g.dijkstra((k * 7919) % n.max(1), &mut dist);
         times.push(t0.elapsed().as_secs_f64());
     }
-    let per_field = crate::experiment::median(&mut times).unwrap_or(0.0);
+    let per_field = crate::stats::median(&mut times).unwrap_or(0.0);
     let total = all.then(|| {
         let t0 = Instant::now();
         (0..n)

@@ -69,3 +69,43 @@ pub enum ClockKind {
     /// Real time.
     Wall,
 }
+
+/// The CPU time of the calling thread, in nanoseconds (what benchmarks time with: it does not
+/// count time the thread spends descheduled on a busy machine). Counts its own readings.
+#[derive(Debug)]
+pub struct CpuClock {
+    start: std::time::Duration,
+    reads: Cell<u64>,
+}
+
+impl Default for CpuClock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl CpuClock {
+    /// A clock reading zero now (on this thread).
+    pub fn new() -> Self {
+        Self {
+            start: cpu_time::ThreadTime::now().as_duration(),
+            reads: Cell::new(0),
+        }
+    }
+
+    /// Times the clock was read.
+    pub fn reads(&self) -> u64 {
+        self.reads.get()
+    }
+}
+
+impl Clock for CpuClock {
+    fn now(&self) -> u64 {
+        self.reads.set(self.reads.get() + 1);
+        let t = cpu_time::ThreadTime::now().as_duration();
+        t.saturating_sub(self.start).as_nanos() as u64
+    }
+    fn ticks_per_second(&self) -> u64 {
+        1_000_000_000
+    }
+}

@@ -23,6 +23,7 @@ use serde::Serialize;
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::maps::Scenario;
 use crate::sim::{Prepared, drive, with_planner};
+use crate::stats::{mean, median};
 
 /// Which goals a run drives through.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -141,24 +142,6 @@ fn short<S: serde::Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error>
         Some(x) => s.serialize_some(&(*x as f32)),
         None => s.serialize_none(),
     }
-}
-
-/// Median of a sample (`None` if empty).
-pub fn median(v: &mut [f64]) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
-}
-
-fn mean(v: &[f64]) -> Option<f64> {
-    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
 
 /// Runs one planner on one scenario with one seed and returns its rows.

@@ -12,6 +12,8 @@
 #[cfg(feature = "sim")]
 pub mod bake;
 #[cfg(feature = "sim")]
+pub mod bench;
+#[cfg(feature = "sim")]
 pub mod bounds;
 pub mod clock;
 #[cfg(feature = "sim")]
@@ -22,9 +24,11 @@ pub mod experiment;
 pub mod graph;
 pub mod maps;
 pub mod metrics;
+pub mod optimum;
 #[cfg(feature = "sim")]
 pub mod run;
 #[cfg(feature = "sim")]
 pub mod sim;
+pub mod stats;
 #[cfg(feature = "sim")]
 pub mod stress;

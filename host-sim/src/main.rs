@@ -116,6 +116,38 @@ enum Command {
         #[arg(long, default_value = "out/experiment")]
         out: PathBuf,
     },
+    /// Benchmark the planners on every leg of each scenario, like OMPL's benchmark: a fresh
+    /// planner per leg and seed, thread CPU time, time to the first solution and path cost
+    /// after fixed CPU budgets, against each leg's exact optimum. Writes bench.csv,
+    /// summary.csv and summary.md.
+    Bench {
+        /// Scenario file (TOML in the form of shared/maps/scenarios.toml).
+        #[arg(long)]
+        scenarios: PathBuf,
+        /// Comma-separated scenario names (default: all in the file).
+        #[arg(long, value_delimiter = ',')]
+        maps: Option<Vec<String>>,
+        /// Legs to run, 1-based and comma-separated (default: all).
+        #[arg(long, value_delimiter = ',')]
+        legs: Option<Vec<usize>>,
+        /// Comma-separated planner names (Table 1 names, any case).
+        #[arg(long, default_value = "Bi-AM-RRT*(D)")]
+        planners: String,
+        /// Seeds per leg and planner (seeds 1..=N).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
+        seeds: u64,
+        /// CPU budgets in seconds at which the path cost is read, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "0.01,0.1,1")]
+        budgets: Vec<f64>,
+        /// Nodes per tree: 2048, 4096 or 8192.
+        #[arg(long, default_value_t = 8192)]
+        nodes: usize,
+        #[command(flatten)]
+        table: TableArgs,
+        /// Output folder.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+    },
     /// Safety stress test: seeded runs on the built-in maps with obstacles dropped on the path,
     /// between the agent and its waypoint, on the goal and around the agent, vanishing again,
     /// and goals changed mid-run; every move is checked. Fails if any move is unsafe or any
@@ -331,6 +363,35 @@ fn main() -> Result<()> {
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
             })
+        }
+        Command::Bench {
+            scenarios,
+            maps: names,
+            legs,
+            planners,
+            seeds,
+            mut budgets,
+            nodes,
+            table,
+            out,
+        } => {
+            if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
+                bail!("--budgets: every budget must be a positive number of seconds");
+            }
+            budgets.sort_by(f64::total_cmp);
+            let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            let variants = host_sim::bench::parse_variants(&planners)?;
+            host_sim::bench::run(&host_sim::bench::BenchArgs {
+                scenarios: scs,
+                legs: legs.unwrap_or_default(),
+                variants,
+                seeds,
+                budgets,
+                nodes,
+                out,
+                table: table.options(),
+            })
+            .map(|_| ())
         }
         Command::Stress {
             runs,

@@ -375,3 +375,36 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
         );
     }
 }
+
+/// The exact optima of the 24 reference legs, as `../shared/anchors/reference-figures.md`
+/// gives them (to the metre's thousandth).
+#[test]
+fn optima_match_the_reference_figures() {
+    let Some(file) = shared_maps() else { return };
+    let anchors = file.parent().unwrap().join("../anchors/reference-figures.md");
+    let Ok(text) = std::fs::read_to_string(&anchors) else {
+        eprintln!("skipped: {} not found", anchors.display());
+        return;
+    };
+    let scs = maps::load_scenarios(&file, None).unwrap();
+    let mut checked = 0;
+    for line in text.lines() {
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        // | map | k | start -> goal | optimum | ...
+        let (Some(map), Some(Ok(k)), Some(Ok(want))) = (
+            cells.get(1),
+            cells.get(2).map(|k| k.parse::<usize>()),
+            cells.get(4).map(|v| v.parse::<f64>()),
+        ) else {
+            continue;
+        };
+        let s = scs.iter().find(|s| s.name == *map).unwrap();
+        let got = host_sim::optimum::leg_optima(s)[k - 1].expect("reachable");
+        assert!(
+            (got - want).abs() <= 0.0015,
+            "{map} leg {k}: {got:.4} m, reference {want} m"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 24, "legs found in {}", anchors.display());
+}

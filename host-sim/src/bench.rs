@@ -1,0 +1,409 @@
+//! The planner benchmark: every leg of a scenario, a fresh planner at the leg's start, the
+//! thread's CPU time as the planner's clock, N seeds per planner. Measured per run: CPU time
+//! from `set_goal` to the goal joining the tree and the length of that first path, the tree's
+//! path cost after fixed CPU budgets (default 0.01, 0.1 and 1 s), nodes, expansions per second
+//! and clock readings per expansion. Lengths are divided by the leg's exact optimum
+//! ([`crate::optimum`]).
+//!
+//! The planner only grows (`Planner::grow`, the agent stands at the leg's start): this is the
+//! static query OMPL's planners answer, measured the way `../shared/anchors/reference-figures.md`
+//! measures them, so the figures compare. Variants in one run are interleaved seed by seed, so
+//! a noisy machine affects them alike.
+//!
+//! Summary: per map and planner, the median over legs of the per-leg medians over seeds (the
+//! reference figures' rule), written as `summary.csv` and printed as a Markdown table.
+
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow};
+use bi_am_rrt::{Config, Map, Planner, Storage};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+use serde::Serialize;
+
+use crate::clock::CpuClock;
+use crate::maps::Scenario;
+use crate::optimum::{leg_optima, leg_starts};
+use crate::sim::{BUCKETS, OBSTACLES, Prepared};
+use crate::stats::median;
+
+/// A named planner configuration of the bench.
+#[derive(Clone, Debug)]
+pub struct Variant {
+    /// The name in the output.
+    pub name: String,
+    /// The configuration.
+    pub cfg: Config,
+}
+
+/// Comma-separated planner names: Table 1 names in any case.
+pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
+    Ok(crate::experiment::parse_planners(spec)?
+        .into_iter()
+        .map(|cfg| Variant {
+            name: cfg.name().to_string(),
+            cfg,
+        })
+        .collect())
+}
+
+/// What to run.
+pub struct BenchArgs {
+    /// Scenarios (every leg of each).
+    pub scenarios: Vec<Scenario>,
+    /// Legs to run (1-based), all when empty.
+    pub legs: Vec<usize>,
+    /// Planner variants.
+    pub variants: Vec<Variant>,
+    /// Seeds per leg and variant (seeds 1..=seeds).
+    pub seeds: u64,
+    /// CPU budgets at which the tree's path cost is read, in seconds, ascending.
+    pub budgets: Vec<f64>,
+    /// Nodes per tree: 2048, 4096 or 8192.
+    pub nodes: usize,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Diffusion table layout.
+    pub table: crate::diffusion::TableOptions,
+}
+
+/// One run: one leg, variant and seed.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRow {
+    pub map: String,
+    pub leg: usize,
+    pub planner: String,
+    pub seed: u64,
+    pub optimal_m: f64,
+    /// CPU time from `set_goal` to the goal joining, in microseconds.
+    pub first_us: Option<f64>,
+    /// Length of the first path to the goal / optimum.
+    pub first_ratio: Option<f64>,
+    /// Forward tree nodes when the goal joined.
+    pub first_nodes: Option<usize>,
+    /// Path cost / optimum after each budget (one column per budget).
+    pub cost_ratio: Vec<Option<f64>>,
+    /// Forward tree nodes at the end.
+    pub nodes: usize,
+    /// Forward and reverse expansions per CPU second.
+    pub expansions_per_s: f64,
+    /// Clock readings per expansion.
+    pub reads_per_expansion: f64,
+    /// Whether an arena filled up.
+    pub full: bool,
+}
+
+/// Runs the bench and writes `bench.csv`, `summary.csv` and `summary.md` into `args.out`.
+pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let mut rows = Vec::new();
+    let mut csv = std::fs::File::create(args.out.join("bench.csv"))?;
+    writeln!(csv, "{}", header(&args.budgets))?;
+    for s in &args.scenarios {
+        let prep = Prepared::with_table(s.clone(), args.table);
+        if args.variants.iter().any(|v| v.cfg.metric == bi_am_rrt::MetricKind::Diffusion) {
+            prep.diffusion()?;
+        }
+        let optima = leg_optima(s);
+        let starts = leg_starts(s);
+        for (k, (&start, &goal)) in starts.iter().zip(&s.goals).enumerate() {
+            let leg = k + 1;
+            if !args.legs.is_empty() && !args.legs.contains(&leg) {
+                continue;
+            }
+            let opt = optima[k].ok_or_else(|| anyhow!("{} leg {leg}: goal unreachable", s.name))?;
+            for seed in 1..=args.seeds {
+                for v in &args.variants {
+                    let r = match args.nodes {
+                        2048 => one::<2048>(&prep, v, seed, start, goal, &args.budgets),
+                        4096 => one::<4096>(&prep, v, seed, start, goal, &args.budgets),
+                        8192 => one::<8192>(&prep, v, seed, start, goal, &args.budgets),
+                        n => return Err(anyhow!("--nodes {n}: use 2048, 4096 or 8192")),
+                    }?;
+                    let row = BenchRow {
+                        map: s.name.clone(),
+                        leg,
+                        planner: v.name.clone(),
+                        seed,
+                        optimal_m: opt,
+                        first_us: r.first_s.map(|t| t * 1e6),
+                        first_ratio: r.first_len.map(|l| l / opt),
+                        first_nodes: r.first_nodes,
+                        cost_ratio: r.costs.iter().map(|c| c.map(|c| c / opt)).collect(),
+                        nodes: r.nodes,
+                        expansions_per_s: r.expansions as f64 / r.cpu_s.max(1e-9),
+                        reads_per_expansion: r.reads as f64 / (r.expansions.max(1)) as f64,
+                        full: r.full,
+                    };
+                    writeln!(csv, "{}", csv_line(&row))?;
+                    csv.flush()?;
+                    rows.push(row);
+                }
+            }
+            eprintln!("{} leg {leg}: done", s.name);
+        }
+    }
+    let summary = summarise(&rows, &args.budgets);
+    std::fs::write(args.out.join("summary.csv"), summary_csv(&summary, &args.budgets))?;
+    let md = summary_markdown(&summary, &args.budgets);
+    std::fs::write(args.out.join("summary.md"), &md)?;
+    print!("{md}");
+    Ok(rows)
+}
+
+/// What one run measured.
+struct Measured {
+    first_s: Option<f64>,
+    first_len: Option<f64>,
+    first_nodes: Option<usize>,
+    costs: Vec<Option<f64>>,
+    nodes: usize,
+    expansions: u64,
+    reads: u64,
+    cpu_s: f64,
+    full: bool,
+}
+
+/// The longest single `grow` call of the bench: budgets are hit within about this much.
+const SLICE: Duration = Duration::from_micros(500);
+
+fn one<const N: usize>(
+    prep: &Prepared,
+    v: &Variant,
+    seed: u64,
+    start: bi_am_rrt::Point,
+    goal: bi_am_rrt::Point,
+    budgets: &[f64],
+) -> Result<Measured> {
+    let mut storage: Box<Storage<N, BUCKETS>> = Box::default();
+    let metric = prep.metric(v.cfg.metric)?;
+    let map: Map<'_, OBSTACLES> = Map::new(prep.scenario.map.grid());
+    let rng = XorShiftRng::seed_from_u64(seed);
+    let cfg = prep.config(v.cfg);
+    let mut planner = Planner::new(&mut storage, map, metric, rng, cfg, start)
+        .map_err(|e| anyhow!("planner: {e}"))?;
+    let clock = CpuClock::new();
+    let t0 = bi_am_rrt::clock::Clock::now(&clock);
+    planner.set_goal(goal).map_err(|e| anyhow!("goal: {e}"))?;
+    let mut costs = Vec::with_capacity(budgets.len());
+    let mut full = false;
+    let mut first: Option<(f64, f64, usize)> = None;
+    let secs = |t: u64| t.saturating_sub(t0) as f64 * 1e-9;
+    for &b in budgets {
+        loop {
+            let now = secs(bi_am_rrt::clock::Clock::now(&clock));
+            if now >= b {
+                break;
+            }
+            let left = Duration::from_secs_f64(b - now).min(SLICE);
+            planner
+                .set_t_exp(left.max(Duration::from_micros(1)))
+                .map_err(|e| anyhow!("{e}"))?;
+            let p = planner.grow(&clock);
+            full |= p.tree_full;
+            if first.is_none()
+                && let (Some(at), Some(c)) = (planner.stats().goal_found_at, p.goal_cost)
+            {
+                // The cost read now may already be lower than when the goal joined, if
+                // rewiring ran in the same call: read the length the goal joined with.
+                let len = planner.stats().first_cost.unwrap_or(c.length) as f64;
+                first = Some((secs(at), len, planner.stats().nodes_at_goal.unwrap_or(0)));
+            }
+        }
+        let c = planner
+            .goal_node()
+            .and_then(|g| planner.tree().cost(g))
+            .filter(|c| !c.blocked)
+            .map(|c| c.length as f64);
+        costs.push(c);
+    }
+    let cpu_s = secs(bi_am_rrt::clock::Clock::now(&clock));
+    let st = planner.stats();
+    Ok(Measured {
+        first_s: first.map(|f| f.0),
+        first_len: first.map(|f| f.1),
+        first_nodes: first.map(|f| f.2),
+        costs,
+        nodes: planner.tree().len(),
+        expansions: st.expansions + st.reverse_expansions,
+        reads: clock.reads(),
+        cpu_s,
+        full,
+    })
+}
+
+fn header(budgets: &[f64]) -> String {
+    let mut h = String::from(
+        "map,leg,planner,seed,optimal_m,first_us,first_ratio,first_nodes,nodes,expansions_per_s,reads_per_expansion,full",
+    );
+    for b in budgets {
+        h.push_str(&format!(",cost_ratio_{b}s"));
+    }
+    h
+}
+
+fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
+    v.map(|v| v.to_string()).unwrap_or_default()
+}
+
+fn csv_line(r: &BenchRow) -> String {
+    let mut s = format!(
+        "{},{},\"{}\",{},{:.3},{},{},{},{},{:.0},{:.1},{}",
+        r.map,
+        r.leg,
+        r.planner,
+        r.seed,
+        r.optimal_m,
+        opt(r.first_us.map(|v| format!("{v:.1}"))),
+        opt(r.first_ratio.map(|v| format!("{v:.4}"))),
+        opt(r.first_nodes),
+        r.nodes,
+        r.expansions_per_s,
+        r.reads_per_expansion,
+        r.full
+    );
+    for c in &r.cost_ratio {
+        s.push(',');
+        s.push_str(&opt(c.map(|v| format!("{v:.4}"))));
+    }
+    s
+}
+
+/// One line of the summary: a map and a planner.
+#[derive(Clone, Debug)]
+pub struct SummaryRow {
+    pub map: String,
+    pub planner: String,
+    /// Legs whose every seed found the goal / legs.
+    pub solved: (usize, usize),
+    pub first_us: Option<f64>,
+    pub first_ratio: Option<f64>,
+    pub cost_ratio: Vec<Option<f64>>,
+    pub nodes: Option<f64>,
+    pub expansions_per_s: Option<f64>,
+    pub reads_per_expansion: Option<f64>,
+}
+
+/// Median over legs of the per-leg medians over seeds. A run that never found the goal counts
+/// as infinitely slow (so the median is honest when some runs fail).
+pub fn summarise(rows: &[BenchRow], budgets: &[f64]) -> Vec<SummaryRow> {
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for r in rows {
+        let k = (r.map.clone(), r.planner.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys.into_iter()
+        .map(|(map, planner)| {
+            let mine: Vec<&BenchRow> = rows
+                .iter()
+                .filter(|r| r.map == map && r.planner == planner)
+                .collect();
+            let mut legs: Vec<usize> = mine.iter().map(|r| r.leg).collect();
+            legs.sort_unstable();
+            legs.dedup();
+            let per_leg = |f: &dyn Fn(&BenchRow) -> Option<f64>| -> Option<f64> {
+                let mut meds: Vec<f64> = legs
+                    .iter()
+                    .filter_map(|&l| {
+                        let mut v: Vec<f64> = mine
+                            .iter()
+                            .filter(|r| r.leg == l)
+                            .map(|r| f(r).unwrap_or(f64::INFINITY))
+                            .collect();
+                        median(&mut v)
+                    })
+                    .collect();
+                median(&mut meds).filter(|m| m.is_finite())
+            };
+            let solved = legs
+                .iter()
+                .filter(|&&l| mine.iter().filter(|r| r.leg == l).all(|r| r.first_us.is_some()))
+                .count();
+            SummaryRow {
+                map: map.clone(),
+                planner: planner.clone(),
+                solved: (solved, legs.len()),
+                first_us: per_leg(&|r| r.first_us),
+                first_ratio: per_leg(&|r| r.first_ratio),
+                cost_ratio: (0..budgets.len())
+                    .map(|i| per_leg(&|r| r.cost_ratio.get(i).copied().flatten()))
+                    .collect(),
+                nodes: per_leg(&|r| Some(r.nodes as f64)),
+                expansions_per_s: per_leg(&|r| Some(r.expansions_per_s)),
+                reads_per_expansion: per_leg(&|r| Some(r.reads_per_expansion)),
+            }
+        })
+        .collect()
+}
+
+fn f(v: Option<f64>, digits: usize) -> String {
+    v.map(|v| format!("{v:.digits$}")).unwrap_or_else(|| "-".into())
+}
+
+fn summary_csv(rows: &[SummaryRow], budgets: &[f64]) -> String {
+    let mut s = String::from("map,planner,legs_solved,legs,first_us,first_ratio");
+    for b in budgets {
+        s.push_str(&format!(",cost_ratio_{b}s"));
+    }
+    s.push_str(",nodes,expansions_per_s,reads_per_expansion\n");
+    for r in rows {
+        s.push_str(&format!(
+            "{},\"{}\",{},{},{},{}",
+            r.map,
+            r.planner,
+            r.solved.0,
+            r.solved.1,
+            f(r.first_us, 1),
+            f(r.first_ratio, 4)
+        ));
+        for c in &r.cost_ratio {
+            s.push_str(&format!(",{}", f(*c, 4)));
+        }
+        s.push_str(&format!(
+            ",{},{},{}\n",
+            f(r.nodes, 0),
+            f(r.expansions_per_s, 0),
+            f(r.reads_per_expansion, 1)
+        ));
+    }
+    s
+}
+
+/// The summary as a Markdown table.
+pub fn summary_markdown(rows: &[SummaryRow], budgets: &[f64]) -> String {
+    let mut s = String::from("| map | planner | legs solved | first solution (us) | first path / opt |");
+    for b in budgets {
+        s.push_str(&format!(" cost at {b} s / opt |"));
+    }
+    s.push_str(" nodes | expansions/s | clock reads/expansion |\n|---|---|---|---:|---:|");
+    for _ in budgets {
+        s.push_str("---:|");
+    }
+    s.push_str("---:|---:|---:|\n");
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {}/{} | {} | {} |",
+            r.map,
+            r.planner,
+            r.solved.0,
+            r.solved.1,
+            f(r.first_us, 0),
+            f(r.first_ratio, 3)
+        ));
+        for c in &r.cost_ratio {
+            s.push_str(&format!(" {} |", f(*c, 3)));
+        }
+        s.push_str(&format!(
+            " {} | {} | {} |\n",
+            f(r.nodes, 0),
+            f(r.expansions_per_s, 0),
+            f(r.reads_per_expansion, 1)
+        ));
+    }
+    s
+}
