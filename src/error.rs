@@ -65,6 +65,8 @@ error_enum! {
         NMax => "n_max must be at least 1",
         /// `sigma` is NaN, infinite or negative.
         Sigma => "sigma must be finite and not negative",
+        /// `e_search` is NaN, infinite or negative.
+        ESearch => "e_search must be finite and not negative",
         /// `steer_candidates` is zero.
         SteerCandidates => "steer_candidates must be at least 1",
         /// `sample_attempts` is zero.

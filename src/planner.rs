@@ -465,7 +465,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.grid().point_free(agent) {
             return Err(InputError::InObstacle);
         }
-        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64);
+        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
+            .reading_every(self.cfg.clock_every);
         // The call's budget starts now: anchoring and following the agent spend it too, and
         // they come first, so nothing but the final check runs after the last expansion.
         self.call = Deadline::after(clock, self.cfg.t_exp);
@@ -487,7 +488,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// stands still (bounded as [`Planner::plan`]). The waypoint is the root, unchecked: no
     /// agent position is given.
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
-        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64);
+        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
+            .reading_every(self.cfg.clock_every);
         self.call = Deadline::after(clock, self.cfg.t_exp);
         let expansions = self.expand_for(&meter);
         self.progress(None, expansions, false, &meter)

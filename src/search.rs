@@ -7,7 +7,8 @@
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
 //!   is Euclidean; otherwise the node nearest by the assisting metric (a scan of the tree; the
 //!   Euclidean nearest if the metric cannot place `x`).
-//! - Steering: a step of at most `e_max` along the segment when it is free. Otherwise AM-RRT*
+//! - Steering: a step of at most `e_max` along the segment when it is free (`e_search` instead
+//!   while the tree's goal is not in it, when a tuned configuration sets it). Otherwise AM-RRT*
 //!   with a non-Euclidean metric draws `steer_candidates` states in the disc of radius
 //!   `min(e_max, d_E)` around the nearest node and keeps the free one closest to the sample by
 //!   the metric (a fixed number of candidates instead of the reference's fixed 2 ms, so a fast
@@ -272,10 +273,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         rng: &mut R,
         from: NodeId,
         x: Point,
+        e_max: f32,
         meter: &Meter<'_, C>,
     ) -> Option<Point> {
         let a = self.pos(from);
-        let e_max = env.cfg.e_max;
         let step = a.step_towards(x, e_max);
         if env.free(a, step, meter) {
             return Some(step);
@@ -405,7 +406,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         self.nearby(goal, e_max, &mut near, meter);
         keep_candidate(&mut near, q);
         let parent = self.best_parent(env, goal, &mut near, meter)?;
-        self.insert_making_room(rng, goal, parent, Some(target), meter, full)
+        self.insert_making_room(rng, goal, parent, Some(target), None, meter, full)
     }
 
     /// Sample, nearest, steer and add (module docs): the new node, and whether it stands on
@@ -430,7 +431,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         )?;
         meter.charge(4);
         let x_nearest = self.nearest(env, x_rand, meter)?;
-        let x_new = self.steer(env, rng, x_nearest, x_rand, meter)?;
+        // Longer steps while this tree's goal is not in it (tuned configurations).
+        let searching = target.as_deref().is_some_and(|t| t.node.is_none());
+        let step = if searching && cfg.e_search > 0.0 {
+            cfg.e_search
+        } else {
+            cfg.e_max
+        };
+        let x_new = self.steer(env, rng, x_nearest, x_rand, step, meter)?;
         let is_goal = target
             .as_deref()
             .is_some_and(|t| t.node.is_none() && t.pos == x_new);
@@ -444,7 +452,17 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let mut near = Near::new();
         let found = self.nearby(x_new, radius, &mut near, meter);
         let far_sample = self.pos(x_nearest).dist(x_rand) > cfg.e_max;
-        if !(found < cfg.n_max as usize || far_sample || is_goal) {
+        // Denser where a node can still shorten the path (tuned configurations).
+        let informed = view
+            .as_ref()
+            .and_then(|v| v.ellipse)
+            .is_some_and(|e| e.contains(x_new));
+        let n_max = if informed {
+            cfg.n_max.max(cfg.n_max_informed)
+        } else {
+            cfg.n_max
+        };
+        if !(found < n_max as usize || far_sample || is_goal) {
             if cfg.base == Base::RtRrt {
                 let _ = self.goal_queue.push_back(x_nearest);
             }
@@ -453,7 +471,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // Keep x_nearest a candidate even when the list was truncated.
         keep_candidate(&mut near, x_nearest);
         let parent = self.best_parent(env, x_new, &mut near, meter)?;
-        let id = self.insert_making_room(rng, x_new, parent, target, meter, full)?;
+        // A full tree may trade a leaf for a state that can shorten the path (tuned).
+        let trade = (cfg.recycle_when_full && informed).then(|| {
+            let goal = view.as_ref().map_or(x_new, |v| v.goal);
+            self.cost(parent)
+                .extend(self.pos(parent).dist(x_new) + x_new.dist(goal), false)
+        });
+        let id = self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?;
         if cfg.base == Base::RtRrt {
             let _ = self.goal_queue.push_back(id);
         }
@@ -464,13 +488,17 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// recycled first ([`TreeStore::recycle`]) if the tree has a `target` that still needs
     /// room: one not joined yet (promise: a goal that can be reached joins) or joined over a
     /// path that crosses a dynamic obstacle (the tree must grow a way around). Once a free
-    /// path exists, a full tree rewires what it has. Sets `full` when the arena was full.
+    /// path exists, a full tree rewires what it has, unless `trade` gives the new state's cost
+    /// bound: then a leaf with a higher bound makes room ([`Config::recycle_when_full`]). Sets
+    /// `full` when the arena was full.
+    #[allow(clippy::too_many_arguments)]
     fn insert_making_room<R: Rng + ?Sized, C: Clock + ?Sized>(
         &mut self,
         rng: &mut R,
         pos: Point,
         parent: NodeId,
         target: Option<&mut Target>,
+        trade: Option<Cost>,
         meter: &Meter<'_, C>,
         full: &mut bool,
     ) -> Option<NodeId> {
@@ -480,11 +508,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         *full = true;
         let t = target?;
         let needs_room = t.node.is_none_or(|g| self.cost(g).blocked);
-        if !needs_room {
+        if !needs_room && trade.is_none() {
             return None;
         }
         let mut keep = [parent, t.node.unwrap_or(parent)];
-        if !self.recycle(rng, t.pos, &mut keep, meter) {
+        let above = if needs_room { None } else { trade };
+        if !self.recycle_above(rng, t.pos, &mut keep, above, meter) {
             return None;
         }
         if t.node.is_some() {
@@ -506,6 +535,19 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         keep: &mut [NodeId],
         meter: &Meter<'_, C>,
     ) -> bool {
+        self.recycle_above(rng, toward, keep, None, meter)
+    }
+
+    /// [`TreeStore::recycle`], removing only a leaf whose score is above `bound` when given
+    /// (and then without the fallback scan: no such leaf among the draws, no removal).
+    pub(crate) fn recycle_above<R: Rng + ?Sized, C: Clock + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        toward: Point,
+        keep: &mut [NodeId],
+        bound: Option<Cost>,
+        meter: &Meter<'_, C>,
+    ) -> bool {
         const DRAWS: usize = 16;
         let len = self.tree.len();
         if len < 2 {
@@ -525,6 +567,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     best = Some((sc, id));
                 }
             }
+        }
+        if let Some(b) = bound
+            && best.is_none_or(|(sc, _)| sc <= b)
+        {
+            meter.charge(units(DRAWS).saturating_add(8));
+            return false;
         }
         let mut scanned: usize = 0;
         if best.is_none() {

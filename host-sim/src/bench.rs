@@ -38,15 +38,60 @@ pub struct Variant {
     pub cfg: Config,
 }
 
-/// Comma-separated planner names: Table 1 names in any case.
+/// Comma-separated planner names: Table 1 names in any case, with or without the suffix
+/// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`, `e_max`,
+/// `n_max`, `n_max_informed`, `clock_every`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`,
+/// `recycle_when_full`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
+/// one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
-    Ok(crate::experiment::parse_planners(spec)?
-        .into_iter()
-        .map(|cfg| Variant {
-            name: cfg.name().to_string(),
-            cfg,
+    spec.split(',')
+        .map(|item| {
+            let mut parts = item.trim().split('@');
+            let name = parts.next().unwrap_or_default();
+            let mut cfg = crate::experiment::parse_planners(name)?
+                .into_iter()
+                .next()
+                .ok_or_else(|| anyhow!("empty planner name"))?;
+            for o in parts {
+                let (k, v) = o
+                    .split_once('=')
+                    .ok_or_else(|| anyhow!("override {o:?}: write field=value"))?;
+                apply(&mut cfg, k.trim(), v.trim()).with_context(|| format!("override {o:?}"))?;
+            }
+            cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
+            let label = item.trim().splitn(2, '@').nth(1);
+            Ok(Variant {
+                name: match label {
+                    Some(l) => format!("{}@{l}", cfg.name()),
+                    None => cfg.name().to_string(),
+                },
+                cfg,
+            })
         })
-        .collect())
+        .collect()
+}
+
+fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
+    use bi_am_rrt::RewireMode;
+    match field {
+        "visits" => cfg.rewire_mode = RewireMode::PerExpansion { visits: v.parse()? },
+        "faithful" => {
+            if v.parse::<bool>()? {
+                cfg.rewire_mode = RewireMode::Faithful;
+            }
+        }
+        "e_max" => cfg.e_max = v.parse()?,
+        "n_max" => cfg.n_max = v.parse()?,
+        "n_max_informed" => cfg.n_max_informed = v.parse()?,
+        "clock_every" => cfg.clock_every = v.parse()?,
+        "steer_candidates" => cfg.steer_candidates = v.parse()?,
+        "p_goal" => cfg.p_goal = v.parse()?,
+        "p_uniform" => cfg.p_uniform = v.parse()?,
+        "e_search" => cfg.e_search = v.parse()?,
+        "recycle_when_full" => cfg.recycle_when_full = v.parse()?,
+        _ => return Err(anyhow!("unknown field {field:?}")),
+    }
+    Ok(())
 }
 
 /// What to run.

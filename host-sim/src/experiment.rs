@@ -77,6 +77,7 @@ pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
             // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
             let found = Config::table1()
                 .into_iter()
+                .chain(Config::table1().map(Config::tuned))
                 .find(|c| c.name().to_string().eq_ignore_ascii_case(name));
             found.with_context(|| {
                 let all: Vec<String> = Config::table1()
@@ -84,7 +85,8 @@ pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
                     .map(|c| c.name().to_string())
                     .collect();
                 format!(
-                    "unknown planner {name:?}; Table 1 names are {}",
+                    "unknown planner {name:?}; Table 1 names are {} (each also with the \
+                     suffix \" tuned\")",
                     all.join(", ")
                 )
             })
@@ -102,6 +104,10 @@ pub struct Row {
     pub reached: bool,
     pub search_time_s: Option<f64>,
     pub path_length_m: f32,
+    /// The leg's exact optimum (from where the agent stood when the goal was set).
+    pub optimal_m: Option<f32>,
+    /// `path_length_m / optimal_m` for a reached goal.
+    pub travelled_ratio: Option<f32>,
     pub collisions: u32,
     pub nodes_at_goal: Option<usize>,
     pub calls: u32,
@@ -129,6 +135,10 @@ pub struct Summary {
     pub path_length_median_m: Option<f64>,
     #[serde(serialize_with = "short")]
     pub path_length_mean_m: Option<f64>,
+    #[serde(serialize_with = "short")]
+    pub travelled_ratio_median: Option<f64>,
+    #[serde(serialize_with = "short")]
+    pub travelled_ratio_max: Option<f64>,
     #[serde(serialize_with = "short")]
     pub nodes_at_goal_median: Option<f64>,
     #[serde(serialize_with = "short")]
@@ -213,6 +223,7 @@ pub fn row(
     anytime_cost_m: Option<f32>,
     run_wall_s: f64,
 ) -> Row {
+    let optimal = prep.optima().get(g.goal_index).copied().flatten();
     Row {
         planner: cfg.name().to_string(),
         scenario: prep.scenario.name.clone(),
@@ -221,6 +232,10 @@ pub fn row(
         reached: g.result.reached,
         search_time_s: g.search_s,
         path_length_m: g.result.travelled,
+        optimal_m: optimal.map(|o| o as f32),
+        travelled_ratio: optimal
+            .filter(|_| g.result.reached)
+            .map(|o| (g.result.travelled as f64 / o) as f32),
         collisions: g.result.collisions,
         nodes_at_goal: g.result.nodes_at_goal,
         calls: g.result.calls,
@@ -260,7 +275,14 @@ pub fn summarise(rows: &[Row]) -> Vec<Summary> {
                 .iter()
                 .filter_map(|r| r.anytime_cost_m.map(|c| c as f64))
                 .collect();
+            let mut ratio: Vec<f64> = reached
+                .iter()
+                .filter_map(|r| r.travelled_ratio.map(f64::from))
+                .collect();
+            let ratio_max = ratio.iter().copied().reduce(f64::max);
             Summary {
+                travelled_ratio_median: median(&mut ratio),
+                travelled_ratio_max: ratio_max,
                 runs: group.len(),
                 reached: reached.len(),
                 collisions: group.iter().map(|r| r.collisions).sum(),
@@ -325,6 +347,7 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
                 p.diffusion()?;
             }
             p.graph();
+            p.optima();
             Ok(())
         })
     })?;
@@ -392,7 +415,7 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
     }
     w.flush()?;
     println!(
-        "{:<16} {:<10} {:>4} {:>8} {:>5} {:>12} {:>12} {:>10} {:>10} {:>9}",
+        "{:<22} {:<10} {:>4} {:>8} {:>5} {:>12} {:>12} {:>10} {:>10} {:>8} {:>8} {:>9}",
         "planner",
         "scenario",
         "goal",
@@ -402,11 +425,13 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
         "search mean",
         "len med",
         "len mean",
+        "/opt med",
+        "/opt max",
         "nodes@g"
     );
     for s in &summary {
         println!(
-            "{:<16} {:<10} {:>4} {:>5}/{:<2} {:>5} {:>10} ms {:>9} ms {:>8} m {:>8} m {:>9}",
+            "{:<22} {:<10} {:>4} {:>5}/{:<2} {:>5} {:>10} ms {:>9} ms {:>8} m {:>8} m {:>8} {:>8} {:>9}",
             s.planner,
             s.scenario,
             s.goal_index,
@@ -417,6 +442,8 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
             fmt_opt(s.search_time_mean_s, 1e3, 2),
             fmt_opt(s.path_length_median_m, 1.0, 2),
             fmt_opt(s.path_length_mean_m, 1.0, 2),
+            fmt_opt(s.travelled_ratio_median, 1.0, 4),
+            fmt_opt(s.travelled_ratio_max, 1.0, 4),
             fmt_opt(s.nodes_at_goal_median, 1.0, 0),
         );
     }

@@ -29,6 +29,8 @@ pub mod optimum;
 pub mod run;
 #[cfg(feature = "sim")]
 pub mod sim;
+#[cfg(feature = "sim")]
+pub mod soak;
 pub mod stats;
 #[cfg(feature = "sim")]
 pub mod stress;

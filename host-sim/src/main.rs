@@ -148,6 +148,39 @@ enum Command {
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
     },
+    /// Soak test: one planner and one agent for a long time with a new random goal every few
+    /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
+    Soak {
+        /// Scenario file (TOML in the form of shared/maps/scenarios.toml).
+        #[arg(long)]
+        scenarios: PathBuf,
+        /// Scenario name in --scenarios.
+        #[arg(long)]
+        scenario: String,
+        /// Planner name (Table 1, optionally with the suffix " tuned").
+        #[arg(long, default_value = "Bi-AM-RRT*(D) tuned")]
+        planner: String,
+        /// Length in minutes of planner CPU time.
+        #[arg(long, default_value_t = 30.0)]
+        minutes: f64,
+        /// Seconds of planner CPU time between two goals.
+        #[arg(long, default_value_t = 3.0)]
+        goal_every: f64,
+        /// Metres the agent moves per call.
+        #[arg(long, default_value_t = 0.7)]
+        speed: f32,
+        /// Nodes per tree: 2048 or 8192.
+        #[arg(long, default_value_t = 8192)]
+        nodes: usize,
+        /// Seed of the planner and the goals.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[command(flatten)]
+        table: TableArgs,
+        /// Output folder.
+        #[arg(long, default_value = "out/soak")]
+        out: PathBuf,
+    },
     /// Safety stress test: seeded runs on the built-in maps with obstacles dropped on the path,
     /// between the agent and its waypoint, on the goal and around the agent, vanishing again,
     /// and goals changed mid-run; every move is checked. Fails if any move is unsafe or any
@@ -388,6 +421,39 @@ fn main() -> Result<()> {
                 seeds,
                 budgets,
                 nodes,
+                out,
+                table: table.options(),
+            })
+            .map(|_| ())
+        }
+        Command::Soak {
+            scenarios,
+            scenario,
+            planner,
+            minutes,
+            goal_every,
+            speed,
+            nodes,
+            seed,
+            table,
+            out,
+        } => {
+            if !(minutes > 0.0 && goal_every > 0.0 && speed > 0.0) {
+                bail!("--minutes, --goal-every and --speed must be positive");
+            }
+            let mut scs = maps::load_scenarios(&scenarios, Some(&[scenario]))?;
+            let cfg = experiment::parse_planners(&planner)?
+                .into_iter()
+                .next()
+                .context("no planner")?;
+            host_sim::soak::run(&host_sim::soak::SoakArgs {
+                scenario: scs.remove(0),
+                cfg,
+                seconds: minutes * 60.0,
+                goal_every,
+                speed,
+                nodes,
+                seed,
                 out,
                 table: table.options(),
             })

@@ -42,6 +42,7 @@ pub struct Prepared {
     pub bake_seconds: OnceLock<f64>,
     /// Layout of the diffusion table.
     pub table: TableOptions,
+    optima: OnceLock<Vec<Option<f64>>>,
 }
 
 impl Prepared {
@@ -58,6 +59,7 @@ impl Prepared {
             diffusion: OnceLock::new(),
             bake_seconds: OnceLock::new(),
             table,
+            optima: OnceLock::new(),
         }
     }
 
@@ -66,6 +68,13 @@ impl Prepared {
         self.graph
             .get_or_init(|| Arc::new(GridGraph::build(&self.scenario.map.grid())))
             .clone()
+    }
+
+    /// The exact optimum of every leg (leg `k` from goal `k - 1`, or the start, to goal `k`),
+    /// in metres; `None` for an unreachable goal.
+    pub fn optima(&self) -> &[Option<f64>] {
+        self.optima
+            .get_or_init(|| crate::optimum::leg_optima(&self.scenario))
     }
 
     /// The baked diffusion table.
