@@ -138,6 +138,10 @@ pub struct Config {
     /// is higher than its own (a node that cannot do better than the new one), so the tree keeps
     /// improving forever. Off: a full tree only rewires (the paper).
     pub recycle_when_full: bool,
+    /// A node added inside the informed ellipse offers itself as parent to its neighbours
+    /// (RRT*'s rewiring step) right away, besides the sweeps. Off: only the sweeps rewire
+    /// (the paper).
+    pub rewire_new: bool,
     /// Steering step while the tree's goal is not in it (the first solution), in metres; 0 =
     /// `e_max` (the paper). Edges stay free whatever their length; `Nearby` keeps `e_max`.
     pub e_search: f32,
@@ -175,6 +179,7 @@ impl Config {
             n_max_informed: 0,
             recycle_when_full: false,
             e_search: 0.0,
+            rewire_new: false,
             profile: Profile::Paper,
         }
     }

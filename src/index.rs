@@ -43,6 +43,10 @@ pub struct SpatialIndex<const N: usize, const B: usize> {
     side: f32,
     inv_side: f32,
     len: usize,
+    /// One past the highest id indexed since the last clear: `clear` resets only
+    /// `next[..hi]` (a reverse tree of a few nodes is cleared in nanoseconds, not by
+    /// rewriting all `N` links).
+    hi: usize,
 }
 
 impl<const N: usize, const B: usize> Default for SpatialIndex<N, B> {
@@ -69,6 +73,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
             side: 0.0,
             inv_side: 0.0,
             len: 0,
+            hi: 0,
         }
     }
 
@@ -152,8 +157,12 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
     /// Removes every node: O(N + B).
     pub fn clear(&mut self) {
         self.head.fill(0);
-        self.next.fill(OUT);
+        match self.next.get_mut(..self.hi) {
+            Some(used) => used.fill(OUT),
+            None => self.next.fill(OUT),
+        }
         self.len = 0;
+        self.hi = 0;
     }
 
     /// The bucket of position `p`.
@@ -188,6 +197,7 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         );
         wr_link(&mut self.head, b, id.0);
         self.len = self.len.saturating_add(1);
+        self.hi = self.hi.max(i.saturating_add(1));
         Ok(())
     }
 

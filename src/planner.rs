@@ -251,7 +251,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// Changes the time budget `t_exp` of the next calls (a caller that knows how much time it
     /// has this cycle). Refused, leaving it unchanged, when zero.
-    pub fn set_t_exp(&mut self, t_exp: core::time::Duration) -> Result<(), crate::error::ConfigError> {
+    pub fn set_t_exp(
+        &mut self,
+        t_exp: core::time::Duration,
+    ) -> Result<(), crate::error::ConfigError> {
         if t_exp.is_zero() {
             return Err(crate::error::ConfigError::TExp);
         }
@@ -433,7 +436,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// passed on `clock`, after `max_expansions_per_call` expansions, or once
     /// `max_work_per_call` work units are done, whichever comes first; every rewiring phase
     /// checks the same limits before each node it visits, and the metric nearest scan every 64
-    /// nodes. On a real clock a call therefore overruns `t_exp` by at most the rest of one
+    /// nodes (with [`Config::clock_every`] set, these checks reuse the last clock reading until
+    /// that much work has been done since it, adding at most that much work to the overrun).
+    /// On a real clock a call therefore overruns `t_exp` by at most the rest of one
     /// expansion step (plus one re-rooting when following is retried): measured on a
     /// Cortex-M4F model (`examples/firmware.rs`, office, 2 x 2,048 nodes, 150 ms), 474 us at
     /// worst, median call 150.10 ms. And whatever the clock (even one that never advances) a
@@ -443,7 +448,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
     /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N / 8)
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
-    /// parent candidates), each `2 + 2 e_max / cell` units at most; a rewiring visit tests at
+    /// parent candidates), each `2 + 2 e / cell` units at most (`e` the longer of `e_max`
+    /// and `e_search`); a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). Measured
     /// (`host-sim frozen`, Bi-AM-RRT*(D) on the reference maps, N = 8192): calls ended within
     /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about

@@ -49,7 +49,7 @@ pub(crate) struct Slice {
 impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// Makes `parent` the parent of `child` when that lowers `child`'s cost over a free
     /// segment. Returns whether the edge changed.
-    fn try_rewire<M: Metric, C: Clock + ?Sized, const K: usize>(
+    pub(crate) fn try_rewire<M: Metric, C: Clock + ?Sized, const K: usize>(
         &mut self,
         env: &Env<'_, '_, M, K>,
         parent: NodeId,

@@ -15,7 +15,9 @@
 //!   implementation does not pay milliseconds per sample); AM-RRT*(E) steps towards the first
 //!   obstacle and stops short of it (bisection of the free prefix); RT-RRT* gives up.
 //! - The node is added when the neighbourhood holds fewer than `n_max` nodes, or the sample was
-//!   farther than `e_max` from its nearest node, or the new state is the goal.
+//!   farther than `e_max` from its nearest node, or the new state is the goal. With
+//!   `rewire_new` (tuned), a node added inside the informed ellipse then offers itself as
+//!   parent to its neighbours, as RRT* does.
 //! - The goal joins below the cheapest node within `e_max` that sees it over a free segment,
 //!   tried whenever a new node lands within `e_max` of it *and* whenever an expansion adds no
 //!   node (a duplicate sample, a dense neighbourhood), so neither the duplicate test nor the
@@ -478,6 +480,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 .extend(self.pos(parent).dist(x_new) + x_new.dist(goal), false)
         });
         let id = self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?;
+        // RRT*'s rewiring around the new node: each neighbour takes it as parent when that is
+        // cheaper over a free segment (tuned configurations, inside the informed ellipse).
+        if cfg.rewire_new && informed {
+            for &nb in near.iter() {
+                meter.charge(1);
+                self.try_rewire(env, id, nb, meter);
+            }
+        }
         if cfg.base == Base::RtRrt {
             let _ = self.goal_queue.push_back(id);
         }

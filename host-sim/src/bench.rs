@@ -40,7 +40,7 @@ pub struct Variant {
 
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
 /// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`, `e_max`,
-/// `n_max`, `n_max_informed`, `clock_every`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`,
+/// `n_max`, `n_max_informed`, `clock_every`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`, `rewire_new`,
 /// `recycle_when_full`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
 /// one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
@@ -59,7 +59,7 @@ pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
                 apply(&mut cfg, k.trim(), v.trim()).with_context(|| format!("override {o:?}"))?;
             }
             cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
-            let label = item.trim().splitn(2, '@').nth(1);
+            let label = item.trim().split_once('@').map(|x| x.1);
             Ok(Variant {
                 name: match label {
                     Some(l) => format!("{}@{l}", cfg.name()),
@@ -88,6 +88,7 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "p_goal" => cfg.p_goal = v.parse()?,
         "p_uniform" => cfg.p_uniform = v.parse()?,
         "e_search" => cfg.e_search = v.parse()?,
+        "rewire_new" => cfg.rewire_new = v.parse()?,
         "recycle_when_full" => cfg.recycle_when_full = v.parse()?,
         _ => return Err(anyhow!("unknown field {field:?}")),
     }
@@ -149,7 +150,11 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
     writeln!(csv, "{}", header(&args.budgets))?;
     for s in &args.scenarios {
         let prep = Prepared::with_table(s.clone(), args.table);
-        if args.variants.iter().any(|v| v.cfg.metric == bi_am_rrt::MetricKind::Diffusion) {
+        if args
+            .variants
+            .iter()
+            .any(|v| v.cfg.metric == bi_am_rrt::MetricKind::Diffusion)
+        {
             prep.diffusion()?;
         }
         let optima = leg_optima(s);
@@ -192,7 +197,10 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         }
     }
     let summary = summarise(&rows, &args.budgets);
-    std::fs::write(args.out.join("summary.csv"), summary_csv(&summary, &args.budgets))?;
+    std::fs::write(
+        args.out.join("summary.csv"),
+        summary_csv(&summary, &args.budgets),
+    )?;
     let md = summary_markdown(&summary, &args.budgets);
     std::fs::write(args.out.join("summary.md"), &md)?;
     print!("{md}");
@@ -367,7 +375,11 @@ pub fn summarise(rows: &[BenchRow], budgets: &[f64]) -> Vec<SummaryRow> {
             };
             let solved = legs
                 .iter()
-                .filter(|&&l| mine.iter().filter(|r| r.leg == l).all(|r| r.first_us.is_some()))
+                .filter(|&&l| {
+                    mine.iter()
+                        .filter(|r| r.leg == l)
+                        .all(|r| r.first_us.is_some())
+                })
                 .count();
             SummaryRow {
                 map: map.clone(),
@@ -387,7 +399,8 @@ pub fn summarise(rows: &[BenchRow], budgets: &[f64]) -> Vec<SummaryRow> {
 }
 
 fn f(v: Option<f64>, digits: usize) -> String {
-    v.map(|v| format!("{v:.digits$}")).unwrap_or_else(|| "-".into())
+    v.map(|v| format!("{v:.digits$}"))
+        .unwrap_or_else(|| "-".into())
 }
 
 fn summary_csv(rows: &[SummaryRow], budgets: &[f64]) -> String {
@@ -421,7 +434,8 @@ fn summary_csv(rows: &[SummaryRow], budgets: &[f64]) -> String {
 
 /// The summary as a Markdown table.
 pub fn summary_markdown(rows: &[SummaryRow], budgets: &[f64]) -> String {
-    let mut s = String::from("| map | planner | legs solved | first solution (us) | first path / opt |");
+    let mut s =
+        String::from("| map | planner | legs solved | first solution (us) | first path / opt |");
     for b in budgets {
         s.push_str(&format!(" cost at {b} s / opt |"));
     }

@@ -78,7 +78,11 @@ impl Corners {
     }
 
     fn occ(&self, c: i64, r: i64) -> bool {
-        c >= 0 && r >= 0 && c < self.cols && r < self.rows && self.occupied[(r * self.cols + c) as usize]
+        c >= 0
+            && r >= 0
+            && c < self.cols
+            && r < self.rows
+            && self.occupied[(r * self.cols + c) as usize]
     }
 
     /// Whether the segment between two points (cell units) stays out of the obstacles'
@@ -142,7 +146,10 @@ impl Corners {
                 }
                 (true, true) => {
                     let (i, j) = (mx.round() as i64, my.round() as i64);
-                    self.occ(i - 1, j - 1) && self.occ(i, j - 1) && self.occ(i - 1, j) && self.occ(i, j)
+                    self.occ(i - 1, j - 1)
+                        && self.occ(i, j - 1)
+                        && self.occ(i - 1, j)
+                        && self.occ(i, j)
                 }
             };
             if blocked {
@@ -157,7 +164,8 @@ impl Corners {
     pub fn shortest(&self, a: Point, b: Point) -> Option<f64> {
         let s = (a.x as f64 / self.cell, a.y as f64 / self.cell);
         let g = (b.x as f64 / self.cell, b.y as f64 / self.cell);
-        let dist = |p: (f64, f64), q: (f64, f64)| ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt();
+        let dist =
+            |p: (f64, f64), q: (f64, f64)| ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt();
         if self.sees(s, g) {
             return Some(dist(s, g) * self.cell);
         }
@@ -245,19 +253,27 @@ mod tests {
     fn around_one_block() {
         // A 2 x 2 block in the middle of a 10 x 10 map: the way from one side to the other
         // goes over two of its corners.
-        let g = OwnedGrid::from_fn(10, 10, 1.0, |c, r| (4..6).contains(&c) && (4..6).contains(&r))
-            .unwrap();
+        let g = OwnedGrid::from_fn(10, 10, 1.0, |c, r| {
+            (4..6).contains(&c) && (4..6).contains(&r)
+        })
+        .unwrap();
         let k = Corners::of(&g.grid());
         assert_eq!(k.len(), 4);
-        let d = k.shortest(Point::new(2.0, 5.0), Point::new(8.0, 5.0)).unwrap();
+        let d = k
+            .shortest(Point::new(2.0, 5.0), Point::new(8.0, 5.0))
+            .unwrap();
         let want = 2.0 * (2.0f64 * 2.0 + 1.0).sqrt() + 2.0;
         assert!((d - want).abs() < 1e-9, "{d} vs {want}");
         // Along the block's face: a straight segment touching the wall is allowed.
-        let d = k.shortest(Point::new(2.0, 4.0), Point::new(8.0, 4.0)).unwrap();
+        let d = k
+            .shortest(Point::new(2.0, 4.0), Point::new(8.0, 4.0))
+            .unwrap();
         assert!((d - 6.0).abs() < 1e-9);
         // Cell size scales the answer.
-        let g2 = OwnedGrid::from_fn(10, 10, 0.5, |c, r| (4..6).contains(&c) && (4..6).contains(&r))
-            .unwrap();
+        let g2 = OwnedGrid::from_fn(10, 10, 0.5, |c, r| {
+            (4..6).contains(&c) && (4..6).contains(&r)
+        })
+        .unwrap();
         let d2 = Corners::of(&g2.grid())
             .shortest(Point::new(1.0, 2.5), Point::new(4.0, 2.5))
             .unwrap();
@@ -268,8 +284,8 @@ mod tests {
     fn closed_squares_shut_a_diagonal_pinch() {
         // Cells (4, 4) and (5, 5) touch at lattice point (5, 5): the straight way from the
         // north-east to the south-west through that point is shut; the path goes around.
-        let g = OwnedGrid::from_fn(10, 10, 1.0, |c, r| (c, r) == (4, 4) || (c, r) == (5, 5))
-            .unwrap();
+        let g =
+            OwnedGrid::from_fn(10, 10, 1.0, |c, r| (c, r) == (4, 4) || (c, r) == (5, 5)).unwrap();
         let k = Corners::of(&g.grid());
         let (a, b) = (Point::new(7.0, 3.0), Point::new(3.0, 7.0));
         let d = k.shortest(a, b).unwrap();

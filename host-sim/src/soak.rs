@@ -180,8 +180,10 @@ fn run_n<const N: usize>(args: &SoakArgs) -> Result<Vec<SoakRow>> {
         rows.push(row);
         if planner_cpu >= (minute + 1) as f64 * 60.0 || planner_cpu >= args.seconds {
             minute = (planner_cpu / 60.0) as u64;
-            let recent: Vec<&SoakRow> =
-                rows.iter().filter(|r| f64::from(r.set_at_s) >= planner_cpu - 60.0).collect();
+            let recent: Vec<&SoakRow> = rows
+                .iter()
+                .filter(|r| f64::from(r.set_at_s) >= planner_cpu - 60.0)
+                .collect();
             print_line(planner_cpu, &recent);
         }
     }
@@ -202,7 +204,10 @@ fn print_line(at: f64, rows: &[&SoakRow]) {
     let mut ratio: Vec<f64> = rows.iter().map(|r| f(r.planned_ratio)).collect();
     let mut nodes: Vec<f64> = rows.iter().map(|r| r.nodes as f64).collect();
     let mut med: Vec<f64> = rows.iter().map(|r| f64::from(r.call_ms_median)).collect();
-    let max = rows.iter().map(|r| f64::from(r.call_ms_max)).fold(0.0, f64::max);
+    let max = rows
+        .iter()
+        .map(|r| f64::from(r.call_ms_max))
+        .fold(0.0, f64::max);
     let found = rows.iter().filter(|r| r.search_ms.is_some()).count();
     println!(
         "{:7.1} s: {} goals, {} joined, search median {:.1} ms, planned/optimal median {:.3}, nodes median {:.0}, call median {:.2} ms, longest {:.2} ms",

@@ -15,7 +15,11 @@ pub fn quantile(v: &mut [f64], q: f64) -> Option<f64> {
     let h = (v.len() - 1) as f64 * q.clamp(0.0, 1.0);
     let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
     let (a, b) = (v[lo], v[hi]);
-    Some(if lo == hi || a == b { a } else { a + (h - lo as f64) * (b - a) })
+    Some(if lo == hi || a == b {
+        a
+    } else {
+        a + (h - lo as f64) * (b - a)
+    })
 }
 
 /// Mean of a sample (`None` if empty).
@@ -34,7 +38,10 @@ mod tests {
         assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), Some(2.5));
         assert_eq!(quantile(&mut [1.0, 2.0, 3.0, 4.0, 5.0], 0.25), Some(2.0));
         assert_eq!(quantile(&mut [1.0, 2.0, 3.0, 4.0], 0.75), Some(3.25));
-        assert_eq!(median(&mut [1.0, f64::INFINITY, f64::INFINITY]), Some(f64::INFINITY));
+        assert_eq!(
+            median(&mut [1.0, f64::INFINITY, f64::INFINITY]),
+            Some(f64::INFINITY)
+        );
         assert_eq!(mean(&[1.0, 2.0]), Some(1.5));
     }
 }

@@ -381,7 +381,10 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
 #[test]
 fn optima_match_the_reference_figures() {
     let Some(file) = shared_maps() else { return };
-    let anchors = file.parent().unwrap().join("../anchors/reference-figures.md");
+    let anchors = file
+        .parent()
+        .unwrap()
+        .join("../anchors/reference-figures.md");
     let Ok(text) = std::fs::read_to_string(&anchors) else {
         eprintln!("skipped: {} not found", anchors.display());
         return;
