@@ -195,13 +195,15 @@ impl Config {
     /// - `n_max_informed` 4 `n_max`: the tree densifies inside the informed ellipse after the
     ///   density rule has saturated the rest of the map;
     /// - `recycle_when_full`: a full arena trades leaves that cannot improve the path for
-    ///   states that can.
+    ///   states that can;
+    /// - `rewire_new`: a node added inside the ellipse rewires its neighbours (RRT*'s step).
     pub const fn tuned(mut self) -> Self {
         self.clock_every = 256;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
         self.e_search = 15.0;
         self.n_max_informed = self.n_max.saturating_mul(4);
         self.recycle_when_full = true;
+        self.rewire_new = true;
         self.profile = Profile::Tuned;
         self
     }
