@@ -411,3 +411,66 @@ fn optima_match_the_reference_figures() {
     }
     assert_eq!(checked, 24, "legs found in {}", anchors.display());
 }
+
+/// The bench on a built-in map: one row per leg, variant and seed, a first solution and a
+/// cost for every run, the summary files written; the optimum is the exact one.
+#[test]
+fn bench_measures_every_leg_variant_and_seed() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = maps::builtin_by_name("open").unwrap();
+    let legs = s.goals.len();
+    let variants =
+        host_sim::bench::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8").unwrap();
+    assert_eq!(variants[1].name, "Bi-AM-RRT*(E) tuned@e_search=8");
+    assert_eq!(variants[1].cfg.e_search, 8.0);
+    let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
+        scenarios: vec![s.clone()],
+        legs: vec![],
+        variants,
+        seeds: 2,
+        budgets: vec![0.002, 0.02],
+        nodes: 2048,
+        out: dir.path().to_path_buf(),
+        table: TableOptions::default(),
+    })
+    .unwrap();
+    assert_eq!(rows.len(), legs * 2 * 2);
+    let optima = host_sim::optimum::leg_optima(&s);
+    for r in &rows {
+        assert_eq!(Some(r.optimal_m), optima[r.leg - 1]);
+        assert!(r.first_us.is_some(), "{r:?}");
+        assert!(r.first_ratio.unwrap() >= 1.0 - 1e-4, "{r:?}");
+        let end = r.cost_ratio[1].unwrap();
+        assert!(
+            (1.0 - 1e-4..=r.first_ratio.unwrap() + 1e-4).contains(&end),
+            "{r:?}"
+        );
+    }
+    for f in ["bench.csv", "summary.csv", "summary.md"] {
+        assert!(dir.path().join(f).exists(), "{f}");
+    }
+    assert!(host_sim::bench::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
+}
+
+/// The soak on a built-in map for a second: goals come and go, every move is checked (a
+/// collision is an error), the tree stays within its arena.
+#[test]
+fn a_short_soak_changes_goals_and_stays_safe() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = host_sim::soak::run(&host_sim::soak::SoakArgs {
+        scenario: maps::builtin_by_name("maze").unwrap(),
+        cfg: bi_am_rrt::Config::bi_am_rrt(bi_am_rrt::MetricKind::Euclidean).tuned(),
+        seconds: 1.0,
+        goal_every: 0.25,
+        speed: 0.7,
+        nodes: 2048,
+        seed: 3,
+        out: dir.path().to_path_buf(),
+        table: TableOptions::default(),
+    })
+    .unwrap();
+    assert!(rows.len() >= 4, "{} goals", rows.len());
+    assert!(rows.iter().all(|r| r.nodes <= 2048 && r.optimal_m > 0.0));
+    assert!(rows.iter().filter(|r| r.search_ms.is_some()).count() >= 3);
+    assert!(dir.path().join("soak.csv").exists());
+}
