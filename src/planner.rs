@@ -449,7 +449,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N / 8)
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
     /// parent candidates), each `2 + 2 e / cell` units at most (`e` the longer of `e_max`
-    /// and `e_search`); a rewiring visit tests at
+    /// and `e_search`), and with `rewire_new` up to 64 rewires around the new node; a
+    /// rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). Measured
     /// (`host-sim frozen`, Bi-AM-RRT*(D) on the reference maps, N = 8192): calls ended within
     /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about
