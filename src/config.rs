@@ -68,9 +68,8 @@ pub enum RewireMode {
 pub enum Profile {
     /// The paper's algorithm with its Table 2 parameters (the named constructors).
     Paper,
-    /// [`Config::tuned`]: the same algorithm with the engineering changes measured in
-    /// `docs/performance.md` (sparser clock readings, densification and recycling in the
-    /// informed set).
+    /// [`Config::tuned`]: the same algorithm with the engineering changes listed there and
+    /// measured in `docs/performance.md`.
     Tuned,
 }
 

@@ -481,7 +481,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         });
         let id = self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?;
         // RRT*'s rewiring around the new node: each neighbour takes it as parent when that is
-        // cheaper over a free segment (tuned configurations, inside the informed ellipse).
+        // cheaper over a free segment (tuned configurations, inside the informed ellipse). A
+        // trade may have renamed one of `near`'s ids; `try_rewire` checks cost and segment of
+        // whatever node an id now names, so that is at worst a wasted test.
         if cfg.rewire_new && informed {
             for &nb in near.iter() {
                 meter.charge(1);

@@ -18,15 +18,13 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
-use bi_am_rrt::{Config, Map, Planner, Storage};
-use rand_core::SeedableRng;
-use rand_xorshift::XorShiftRng;
+use bi_am_rrt::Config;
 use serde::Serialize;
 
 use crate::clock::CpuClock;
 use crate::maps::Scenario;
-use crate::optimum::{leg_optima, leg_starts};
-use crate::sim::{BUCKETS, OBSTACLES, Prepared};
+use crate::optimum::leg_starts;
+use crate::sim::{Prepared, SizedPlanner, with_planner_at};
 use crate::stats::median;
 
 /// A named planner configuration of the bench.
@@ -157,7 +155,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         {
             prep.diffusion()?;
         }
-        let optima = leg_optima(s);
+        let optima = prep.optima();
         let starts = leg_starts(s);
         for (k, (&start, &goal)) in starts.iter().zip(&s.goals).enumerate() {
             let leg = k + 1;
@@ -231,13 +229,17 @@ fn one<const N: usize>(
     goal: bi_am_rrt::Point,
     budgets: &[f64],
 ) -> Result<Measured> {
-    let mut storage: Box<Storage<N, BUCKETS>> = Box::default();
-    let metric = prep.metric(v.cfg.metric)?;
-    let map: Map<'_, OBSTACLES> = Map::new(prep.scenario.map.grid());
-    let rng = XorShiftRng::seed_from_u64(seed);
-    let cfg = prep.config(v.cfg);
-    let mut planner = Planner::new(&mut storage, map, metric, rng, cfg, start)
-        .map_err(|e| anyhow!("planner: {e}"))?;
+    with_planner_at::<N, _>(prep, v.cfg, seed, start, |planner| {
+        measure(planner, goal, budgets)
+    })
+}
+
+/// Grows `planner` towards `goal` until each CPU budget has passed (module docs).
+fn measure<const N: usize>(
+    planner: &mut SizedPlanner<'_, '_, N>,
+    goal: bi_am_rrt::Point,
+    budgets: &[f64],
+) -> Result<Measured> {
     let clock = CpuClock::new();
     let t0 = bi_am_rrt::clock::Clock::now(&clock);
     planner.set_goal(goal).map_err(|e| anyhow!("goal: {e}"))?;

@@ -28,9 +28,12 @@ pub const OBSTACLES: usize = 8;
 /// Geodesic field cache per run, in bytes.
 pub const GEODESIC_CACHE_BYTES: usize = 192 << 20;
 
+/// The simulator's planner type with `N` nodes per tree.
+pub type SizedPlanner<'s, 't, const N: usize> =
+    Planner<'s, 't, AnyMetric<'t>, XorShiftRng, N, BUCKETS, OBSTACLES>;
+
 /// The simulator's planner type.
-pub type SimPlanner<'s, 't> =
-    Planner<'s, 't, AnyMetric<'t>, XorShiftRng, NODES, BUCKETS, OBSTACLES>;
+pub type SimPlanner<'s, 't> = SizedPlanner<'s, 't, NODES>;
 
 /// A scenario with its metric data, computed on first use and shared by all runs.
 pub struct Prepared {
@@ -118,20 +121,24 @@ pub fn with_planner<T>(
     seed: u64,
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
+    with_planner_at::<NODES, T>(prep, cfg, seed, prep.scenario.start, f)
+}
+
+/// Builds a planner of `N` nodes per tree for `prep`, starting at `start`, and hands it to `f`.
+pub fn with_planner_at<const N: usize, T>(
+    prep: &Prepared,
+    cfg: Config,
+    seed: u64,
+    start: bi_am_rrt::Point,
+    f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
+) -> Result<T> {
     prep.scenario.validate()?;
-    let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
+    let mut storage: Box<Storage<N, BUCKETS>> = Box::default();
     let metric = prep.metric(cfg.metric)?;
     let map = Map::new(prep.scenario.map.grid());
     let rng = XorShiftRng::seed_from_u64(seed);
-    let mut planner = Planner::new(
-        &mut storage,
-        map,
-        metric,
-        rng,
-        prep.config(cfg),
-        prep.scenario.start,
-    )
-    .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
+    let mut planner = Planner::new(&mut storage, map, metric, rng, prep.config(cfg), start)
+        .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
     f(&mut planner)
 }
 

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
 use bi_am_rrt::clock::Clock;
-use bi_am_rrt::{Config, Map, Planner, Point, Storage};
+use bi_am_rrt::{Config, Point};
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 use serde::Serialize;
@@ -22,7 +22,7 @@ use serde::Serialize;
 use crate::clock::CpuClock;
 use crate::maps::Scenario;
 use crate::optimum::Corners;
-use crate::sim::{BUCKETS, OBSTACLES, Prepared};
+use crate::sim::{Prepared, SizedPlanner, with_planner_at};
 use crate::stats::median;
 
 /// What to run.
@@ -80,27 +80,25 @@ fn run_n<const N: usize>(args: &SoakArgs) -> Result<Vec<SoakRow>> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let prep = Prepared::with_table(args.scenario.clone(), args.table);
     let corners = Corners::of(&prep.scenario.map.grid());
-    let mut storage: Box<Storage<N, BUCKETS>> = Box::default();
-    let metric = prep.metric(args.cfg.metric)?;
-    let map: Map<'_, OBSTACLES> = Map::new(prep.scenario.map.grid());
-    let cfg = prep.config(args.cfg);
-    let mut planner = Planner::new(
-        &mut storage,
-        map,
-        metric,
-        XorShiftRng::seed_from_u64(args.seed),
-        cfg,
-        prep.scenario.start,
-    )
-    .map_err(|e| anyhow!("planner: {e}"))?;
+    with_planner_at::<N, _>(&prep, args.cfg, args.seed, prep.scenario.start, |planner| {
+        drive(planner, args, &corners)
+    })
+}
+
+/// The soak proper on a built planner (module docs).
+fn drive<const N: usize>(
+    planner: &mut SizedPlanner<'_, '_, N>,
+    args: &SoakArgs,
+    corners: &Corners,
+) -> Result<Vec<SoakRow>> {
     let mut goals = XorShiftRng::seed_from_u64(args.seed ^ 0x5eed);
     let clock = CpuClock::new();
     let secs = |t: u64| t as f64 * 1e-9;
     let mut csv = csv::Writer::from_path(args.out.join("soak.csv"))?;
     let mut rows: Vec<SoakRow> = Vec::new();
-    let mut agent = prep.scenario.start;
+    let mut agent = args.scenario.start;
     let mut minute = 0u64;
-    let grid = prep.scenario.map.grid();
+    let grid = args.scenario.map.grid();
     let mut planner_cpu = 0.0f64;
     while planner_cpu < args.seconds {
         // A new reachable goal.
