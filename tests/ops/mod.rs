@@ -156,7 +156,20 @@ fn run_with<M: Metric>(
     cfg.t_exp = Duration::from_micros(1 + b.u16() as u64 * 4);
     cfg.max_work_per_call = 2_000 + b.u16() as u32 * 2;
     cfg.max_expansions_per_call = 1 + b.u8() as u32 * 4;
-    cfg.keep_reverse_branches = b.u8() & 1 == 1;
+    // One byte of switches: the reverse branches and, one by one, the tuned set's changes.
+    let flags = b.u8();
+    cfg.keep_reverse_branches = flags & 1 != 0;
+    cfg.recycle_when_full = flags & 2 != 0;
+    cfg.rewire_new = flags & 4 != 0;
+    if flags & 8 != 0 {
+        cfg.clock_every = 256;
+    }
+    if flags & 16 != 0 {
+        cfg.n_max_informed = cfg.n_max.saturating_mul(4);
+    }
+    if flags & 32 != 0 {
+        cfg.e_search = cfg.e_max * 3.0;
+    }
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
