@@ -272,6 +272,17 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         if self.len == 0 || !q.is_finite() {
             return None;
         }
+        if Self::scan_is_cheaper(positions.len(), self.bucket_count() / 4) {
+            let mut best: Option<(NodeId, f32)> = None;
+            for (i, p) in positions.iter().enumerate() {
+                let id = NodeId(to_u16(i));
+                let d2 = p.dist_sq(q);
+                if best.is_none_or(|(_, bd)| d2 < bd) && self.contains(id) && accept(id) {
+                    best = Some((id, d2));
+                }
+            }
+            return best;
+        }
         let (qc, qr) = self.bucket_coords(q);
         let (qc, qr) = (qc as i32, qr as i32);
         let (cols, rows) = self.shape();
@@ -333,6 +344,18 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         let r2 = radius * radius;
         let (c0, r0) = self.bucket_coords(Point::new(q.x - radius, q.y - radius));
         let (c1, r1) = self.bucket_coords(Point::new(q.x + radius, q.y + radius));
+        let span = |lo: u16, hi: u16| usize::from(hi.saturating_sub(lo)).saturating_add(1);
+        let boxed = span(c0, c1).saturating_mul(span(r0, r1));
+        if Self::scan_is_cheaper(positions.len(), boxed) {
+            for (i, p) in positions.iter().enumerate() {
+                let id = NodeId(to_u16(i));
+                let d2 = p.dist_sq(q);
+                if d2 <= r2 && self.contains(id) {
+                    f(id, d2)?;
+                }
+            }
+            return ControlFlow::Continue(());
+        }
         for row in r0..=r1 {
             for col in c0..=c1 {
                 let b = cell_index(col, row, self.shape().0);
@@ -369,6 +392,20 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
             ControlFlow::Continue(())
         });
         found
+    }
+
+    /// Number of buckets in the grid.
+    fn bucket_count(&self) -> usize {
+        let (cols, rows) = self.shape();
+        usize::from(cols).saturating_mul(usize::from(rows))
+    }
+
+    /// Whether reading all `nodes` positions costs less than visiting `buckets` buckets: a
+    /// small tree on a large grid, where most buckets are empty (a search tree of a dozen
+    /// nodes on a 40 x 40 grid). The answer is the same either way (only the order in which
+    /// nodes at equal distances are met may differ).
+    fn scan_is_cheaper(nodes: usize, buckets: usize) -> bool {
+        nodes <= buckets
     }
 
     fn bucket_coords(&self, p: Point) -> (u16, u16) {
