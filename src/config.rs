@@ -144,6 +144,12 @@ pub struct Config {
     /// Steering step while the tree's goal is not in it (the first solution), in metres; 0 =
     /// `e_max` (the paper). Edges stay free whatever their length; `Nearby` keeps `e_max`.
     pub e_search: f32,
+    /// RRT-Connect's greedy step in bidirectional search (Kuffner and LaValle): when a node
+    /// added to one tree meets nothing in the other within `sigma`, the other tree walks
+    /// straight towards it from its nearest node in free steps of `e_search` (or `e_max`),
+    /// adding each as a node, until it sees the new node (the trees meet) or a step is
+    /// blocked. Off: trees meet only within `sigma` (the paper).
+    pub connect: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -179,6 +185,7 @@ impl Config {
             recycle_when_full: false,
             e_search: 0.0,
             rewire_new: false,
+            connect: false,
             profile: Profile::Paper,
         }
     }
@@ -195,7 +202,10 @@ impl Config {
     ///   density rule has saturated the rest of the map;
     /// - `recycle_when_full`: a full arena trades leaves that cannot improve the path for
     ///   states that can;
-    /// - `rewire_new`: a node added inside the ellipse rewires its neighbours (RRT*'s step).
+    /// - `rewire_new`: a node added inside the ellipse rewires its neighbours (RRT*'s step);
+    /// - `connect`: RRT-Connect's greedy step between the two trees while searching;
+    /// - `p_goal` 0.5: half the samples are the goal while it is not in the tree (the paper
+    ///   samples it 30 % of the time).
     pub const fn tuned(mut self) -> Self {
         self.clock_every = 256;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
@@ -203,6 +213,8 @@ impl Config {
         self.n_max_informed = self.n_max.saturating_mul(4);
         self.recycle_when_full = true;
         self.rewire_new = true;
+        self.connect = true;
+        self.p_goal = 0.5;
         self.profile = Profile::Tuned;
         self
     }

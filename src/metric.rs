@@ -64,6 +64,39 @@ pub trait Metric {
     fn take_work(&self) -> u32 {
         0
     }
+
+    /// One end of many distance queries, resolved once: the planner measures a whole tree, a
+    /// batch of steering candidates or a goal's neighbourhood against the same position.
+    /// Default: nothing is resolved.
+    fn prepare(&self, p: Point) -> Prepared {
+        Prepared::plain(p)
+    }
+
+    /// `distance(a, to.point())`, the same value bit for bit, using what `prepare` resolved.
+    fn distance_to(&self, a: Point, to: &Prepared) -> f32 {
+        self.distance(a, to.point)
+    }
+}
+
+/// A position resolved by [`Metric::prepare`] for repeated [`Metric::distance_to`] queries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prepared {
+    point: Point,
+    /// What the metric resolved (for a diffusion table: the entry, or `u32::MAX` when the
+    /// position cannot be placed); `None`: nothing.
+    key: Option<u32>,
+}
+
+impl Prepared {
+    /// A position with nothing resolved (any metric answers it through `distance`).
+    pub const fn plain(point: Point) -> Self {
+        Self { point, key: None }
+    }
+
+    /// The position.
+    pub const fn point(&self) -> Point {
+        self.point
+    }
 }
 
 impl<M: Metric + ?Sized> Metric for &M {
@@ -75,6 +108,12 @@ impl<M: Metric + ?Sized> Metric for &M {
     }
     fn take_work(&self) -> u32 {
         (**self).take_work()
+    }
+    fn prepare(&self, p: Point) -> Prepared {
+        (**self).prepare(p)
+    }
+    fn distance_to(&self, a: Point, to: &Prepared) -> f32 {
+        (**self).distance_to(a, to)
     }
 }
 
@@ -559,14 +598,14 @@ fn stored_sq(kind: ElementKind, a: &[u8], b: &[u8]) -> Option<f32> {
     Some(sum)
 }
 
-impl Metric for DiffusionTable<'_> {
-    fn distance(&self, a: Point, b: Point) -> f32 {
-        let (Some(ca), Some(cb)) = (self.cell(a), self.cell(b)) else {
-            return f32::INFINITY;
-        };
-        if self.element(ca, 0).is_none() || self.element(cb, 0).is_none() {
-            return f32::INFINITY;
-        }
+impl DiffusionTable<'_> {
+    /// The entry of a position that has coordinates.
+    fn placed(&self, p: Point) -> Option<usize> {
+        self.cell(p).filter(|&c| self.element(c, 0).is_some())
+    }
+
+    /// `d_D` between two placed entries.
+    fn entry_distance(&self, ca: usize, cb: usize) -> f32 {
         if ca == cb {
             return 0.0;
         }
@@ -578,6 +617,38 @@ impl Metric for DiffusionTable<'_> {
                 None => f32::INFINITY,
             },
             _ => f32::INFINITY,
+        }
+    }
+}
+
+impl Metric for DiffusionTable<'_> {
+    fn distance(&self, a: Point, b: Point) -> f32 {
+        match (self.placed(a), self.placed(b)) {
+            (Some(ca), Some(cb)) => self.entry_distance(ca, cb),
+            _ => f32::INFINITY,
+        }
+    }
+
+    fn prepare(&self, p: Point) -> Prepared {
+        let key = self
+            .placed(p)
+            .and_then(|c| u32::try_from(c).ok())
+            .unwrap_or(u32::MAX);
+        Prepared {
+            point: p,
+            key: Some(key),
+        }
+    }
+
+    fn distance_to(&self, a: Point, to: &Prepared) -> f32 {
+        let cb = match to.key {
+            None => return self.distance(a, to.point),
+            Some(u32::MAX) => return f32::INFINITY,
+            Some(k) => k as usize,
+        };
+        match self.placed(a) {
+            Some(ca) => self.entry_distance(ca, cb),
+            None => f32::INFINITY,
         }
     }
 }
@@ -876,6 +947,13 @@ mod tests {
                         by_elements(a, b).to_bits(),
                         "{a:?} {b:?}"
                     );
+                    // A prepared end gives the same value (placed, unplaced and outside).
+                    assert_eq!(
+                        t.distance_to(a, &t.prepare(b)).to_bits(),
+                        t.distance(a, b).to_bits(),
+                        "prepared {a:?} {b:?}"
+                    );
+                    assert_eq!(Euclidean.distance_to(a, &Euclidean.prepare(b)), a.dist(b));
                 }
             }
         }

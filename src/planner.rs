@@ -704,8 +704,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.stats.expansions = self.stats.expansions.saturating_add(1);
         if grown.goal_joined {
             self.goal_joined(meter);
-        } else if let (Some(a), true) = (grown.added, self.rev_goal.is_some()) {
-            self.try_meet(a, true, meter);
+        } else if let (Some(a), true) = (grown.added, self.rev_goal.is_some())
+            && !self.try_meet(a, true, meter)
+        {
+            self.connect(a, true, meter);
         }
         // Rewiring of the forward tree.
         let env = Env {
@@ -739,8 +741,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 .expand(&env, &mut self.rng, self.rev_goal.as_mut(), meter);
             self.full |= grown.full;
             self.stats.reverse_expansions = self.stats.reverse_expansions.saturating_add(1);
-            if let Some(b) = grown.added {
-                self.try_meet(b, false, meter);
+            if let Some(b) = grown.added
+                && !self.try_meet(b, false, meter)
+            {
+                self.connect(b, false, meter);
             }
             if self.rev_goal.is_some() {
                 let env = Env {
@@ -772,9 +776,46 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
+    /// With [`Config::connect`]: the other tree walks straight towards node `new` of one tree
+    /// (`forward` tells which), and the two are grafted when it reaches it (module docs).
+    fn connect<C: Clock + ?Sized>(&mut self, new: NodeId, forward: bool, meter: &Meter<'_, C>) {
+        if !self.cfg.connect {
+            return;
+        }
+        let env = Env {
+            map: &self.map,
+            metric: &self.metric,
+            cfg: &self.cfg,
+            call: self.call,
+        };
+        let step = if self.cfg.e_search > 0.0 {
+            self.cfg.e_search
+        } else {
+            self.cfg.e_max
+        };
+        let pair = if forward {
+            let p = self.fwd.pos(new);
+            self.rev.connect(&env, p, step, meter).map(|b| (new, b))
+        } else {
+            let p = self.rev.pos(new);
+            self.fwd.connect(&env, p, step, meter).map(|a| (a, new))
+        };
+        if let Some((a, b)) = pair
+            && self.graft(a, b, meter)
+        {
+            self.stats.met = true;
+            self.goal_joined(meter);
+        }
+    }
+
     /// Meet test for a node just added to one tree (`forward` tells which) against the other,
-    /// and graft on success (module docs).
-    fn try_meet<C: Clock + ?Sized>(&mut self, new: NodeId, forward: bool, meter: &Meter<'_, C>) {
+    /// and graft on success (module docs). Returns whether the trees met.
+    fn try_meet<C: Clock + ?Sized>(
+        &mut self,
+        new: NodeId,
+        forward: bool,
+        meter: &Meter<'_, C>,
+    ) -> bool {
         const PAIRS: usize = 16;
         let (this, other) = if forward {
             (&*self.fwd, &*self.rev)
@@ -816,17 +857,19 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             .iter()
             .find(|(_, id)| env.free(p, other.pos(*id), meter))
         else {
-            return;
+            return false;
         };
         let (a, b) = if forward {
             (new, partner)
         } else {
             (partner, new)
         };
-        if self.graft(a, b, meter) {
+        let met = self.graft(a, b, meter);
+        if met {
             self.stats.met = true;
             self.goal_joined(meter);
         }
+        met
     }
 
     /// Grafts the reverse tree's trunk from `b` to its root (the goal) below forward node `a`,

@@ -160,6 +160,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let radius = env.radius(self.tree.len());
         let mut near = Near::new();
         let mut frontier = Near::new();
+        let to_goal = env.metric.prepare(goal.pos);
         for _ in 0..slice.visits {
             if meter.expired(&slice.deadline) {
                 return;
@@ -204,13 +205,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             if !inside(x1_pos) {
                 continue;
             }
-            let d1 = env.metric(x1_pos, goal.pos, meter);
+            let d1 = env.metric_to(x1_pos, &to_goal, meter);
             self.nearby(x1_pos, radius, &mut near, meter);
             // Decreasing d_A(., goal): the neighbour nearest the goal ends on top of the stack.
             let mut keyed: heapless::Vec<(f32, NodeId), { crate::search::NEAR_CAP }> =
                 heapless::Vec::new();
             for &id in near.iter() {
-                let _ = keyed.push((env.metric(self.pos(id), goal.pos, meter), id));
+                let _ = keyed.push((env.metric_to(self.pos(id), &to_goal, meter), id));
             }
             sort_small_by(&mut keyed, |a, b| b.0.total_cmp(&a.0));
             frontier.clear();
@@ -236,7 +237,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 }
             }
             if let Some(&top) = self.goal_stack.last()
-                && env.metric(self.pos(top), goal.pos, meter) > d1
+                && env.metric_to(self.pos(top), &to_goal, meter) > d1
             {
                 self.goal_stack.clear();
             }

@@ -35,7 +35,7 @@ use crate::error::TreeError;
 use crate::geometry::{Ellipse, Point, sample_disc};
 use crate::index::SpatialIndex;
 use crate::map::Map;
-use crate::metric::Metric;
+use crate::metric::{Metric, Prepared};
 use crate::sample::{GoalView, sample_state};
 use crate::slots::{sat_u32, sort_small_by, to_u16, units};
 use crate::sweep::{NodeQueue, NodeStack, SWEEP_CAP};
@@ -44,6 +44,14 @@ use rand_core::Rng;
 
 /// Most neighbours one `Nearby` query hands to the planner (more are counted, not used).
 pub const NEAR_CAP: usize = 64;
+
+/// Most nodes one greedy connection ([`TreeStore::connect`]) adds.
+pub const CONNECT_STEPS: usize = 32;
+
+/// Steering candidates ranked at once (more are drawn in several batches).
+const STEER_BATCH: usize = 32;
+/// [`STEER_BATCH`] as a candidate count.
+const STEER_BATCH_U16: u16 = 32;
 
 /// The neighbour list type.
 pub(crate) type Near = heapless::Vec<NodeId, NEAR_CAP>;
@@ -198,9 +206,15 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
         duplicate_sq(self.map.grid().cell_size())
     }
 
-    /// `d_A`, charged (2 units plus what the metric reports).
-    pub fn metric<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> f32 {
-        let d = self.metric.distance(a, b);
+    /// `d_A` to a prepared end ([`Metric::prepare`]), charged 2 units plus what the metric
+    /// reports.
+    pub fn metric_to<C: Clock + ?Sized>(
+        &self,
+        a: Point,
+        to: &Prepared,
+        meter: &Meter<'_, C>,
+    ) -> f32 {
+        let d = self.metric.distance_to(a, to);
         meter.charge(2u32.saturating_add(self.metric.take_work()));
         d
     }
@@ -254,13 +268,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             return Some(near);
         }
         let mut best = (near, f32::INFINITY);
+        let to = env.metric.prepare(x);
         for id in self.tree.ids() {
             // The metric scan reads the whole tree (about 2 ms for 2,048 nodes on a Cortex-M4
             // at 168 MHz): it gives up when the call's time is over.
             if id.0 & 63 == 63 && meter.expired(&env.call) {
                 return None;
             }
-            let d = env.metric(self.pos(id), x, meter);
+            let d = env.metric_to(self.pos(id), &to, meter);
             if d < best.1 {
                 best = (id, d);
             }
@@ -304,16 +319,47 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             let p = a.step_towards(step, len);
             return env.free(a, p, meter).then_some(p);
         }
+        // The free candidate closest to `x` by the metric (the first drawn among equals). The
+        // metric is cheaper than a segment test of `e_max`: candidates are ranked first, in
+        // batches, and segments tested in rank order until one is free.
         let radius = e_max.min(a.dist(x));
+        let to = env.metric.prepare(x);
         let mut best: Option<(Point, f32)> = None;
-        for _ in 0..env.cfg.steer_candidates {
-            let c = sample_disc(rng, a, radius);
-            if !env.free(a, c, meter) {
-                continue;
+        let mut left = env.cfg.steer_candidates;
+        while left > 0 {
+            let n = left.min(STEER_BATCH_U16);
+            left = left.saturating_sub(n);
+            let mut batch = heapless::Vec::<(f32, Point), STEER_BATCH>::new();
+            for _ in 0..n {
+                let c = sample_disc(rng, a, radius);
+                meter.charge(2);
+                if !env.map.free_point(c) {
+                    continue;
+                }
+                let d = env.metric_to(c, &to, meter);
+                if best.is_none_or(|(_, bd)| d < bd) {
+                    let _ = batch.push((d, c));
+                }
             }
-            let d = env.metric(c, x, meter);
-            if best.is_none_or(|(_, bd)| d < bd) {
-                best = Some((c, d));
+            // Lowest first (the first drawn among equals): a selection, not a sort, since the
+            // first or second candidate tested is usually free.
+            let mut tested: u32 = 0; // one bit per candidate (STEER_BATCH = 32)
+            for _ in 0..batch.len() {
+                let mut pick: Option<(usize, f32, Point)> = None;
+                for (i, &(d, c)) in batch.iter().enumerate() {
+                    let untested = tested & (1u32 << (i & 31)) == 0;
+                    if untested && pick.is_none_or(|(_, pd, _)| d.total_cmp(&pd).is_lt()) {
+                        pick = Some((i, d, c));
+                    }
+                }
+                let Some((i, d, c)) = pick else {
+                    break;
+                };
+                if env.free(a, c, meter) {
+                    best = Some((c, d));
+                    break;
+                }
+                tested |= 1u32 << (i & 31);
             }
         }
         best.map(|(p, _)| p)
@@ -496,6 +542,35 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         Some((id, is_goal))
     }
 
+    /// RRT-Connect's greedy step ([`Config::connect`]): from the node nearest `x`, straight
+    /// steps of at most `step` towards `x`, each added below the last when its segment is free,
+    /// until a node within `step` of `x` sees it over a free segment (returned), or a step is
+    /// blocked, the arena is full or [`CONNECT_STEPS`] nodes were added (`None`; the nodes
+    /// added stay, as in RRT-Connect).
+    pub(crate) fn connect<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        x: Point,
+        step: f32,
+        meter: &Meter<'_, C>,
+    ) -> Option<NodeId> {
+        meter.charge(8);
+        let (mut from, _) = self.index.nearest(x, self.tree.positions())?;
+        for _ in 0..=CONNECT_STEPS {
+            let a = self.pos(from);
+            if a.dist(x) <= step {
+                return env.free(a, x, meter).then_some(from);
+            }
+            let next = a.step_towards(x, step);
+            if self.tree.is_full() || !env.free(a, next, meter) {
+                return None;
+            }
+            meter.charge(4);
+            from = self.insert(next, from, false).ok()?;
+        }
+        None
+    }
+
     /// Inserts a node below `parent` (its edge free). When the arena is full, one leaf is
     /// recycled first ([`TreeStore::recycle`]) if the tree has a `target` that still needs
     /// room: one not joined yet (promise: a goal that can be reached joins) or joined over a
@@ -671,6 +746,62 @@ mod tests {
         fn distance(&self, a: Point, b: Point) -> f32 {
             self.0.set(self.0.get() + 1);
             a.dist(b)
+        }
+    }
+
+    /// A metric that is not Euclidean: the Manhattan distance.
+    struct Manhattan;
+
+    impl Metric for Manhattan {
+        fn distance(&self, a: Point, b: Point) -> f32 {
+            libm::fabsf(a.x - b.x) + libm::fabsf(a.y - b.y)
+        }
+    }
+
+    /// The ranked steering (metric first, segments in rank order, in batches) picks what the
+    /// plain rule picks: among the drawn candidates with a free segment, the first drawn of
+    /// those nearest the sample by the metric.
+    #[test]
+    fn steering_picks_the_free_candidate_nearest_by_the_metric() {
+        use rand_core::SeedableRng;
+        // A wall at row 10 with a gap at columns 14-15, between the node and the sample.
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        pack_grid(&mut bits, 20, 20, |c, r| r == 10 && !(14..16).contains(&c)).unwrap();
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
+        let mut store = TreeStore::<16, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        let a = Point::new(5.5, 8.5);
+        store.reset(a);
+        let x = Point::new(5.5, 18.5);
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        for candidates in [1u16, 7, 24, 32, 33, 70] {
+            let mut cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
+            cfg.steer_candidates = candidates;
+            let env = Env {
+                map: &map,
+                metric: &Manhattan,
+                cfg: &cfg,
+                call: Deadline::NEVER,
+            };
+            for seed in 0..20 {
+                let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(seed);
+                let got = store.steer(&env, &mut rng, NodeId(0), x, 8.0, &meter);
+                let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(seed);
+                let mut want: Option<(Point, f32)> = None;
+                for _ in 0..candidates {
+                    let c = sample_disc(&mut rng, a, 8.0);
+                    let d = Manhattan.distance(c, x);
+                    if map.free_path(a, c) && want.is_none_or(|(_, wd)| d < wd) {
+                        want = Some((c, d));
+                    }
+                }
+                assert_eq!(
+                    got,
+                    want.map(|w| w.0),
+                    "{candidates} candidates, seed {seed}"
+                );
+            }
         }
     }
 

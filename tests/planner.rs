@@ -623,3 +623,55 @@ fn regression_storage_fits_4096_nodes_in_96_kib() {
         "{s2048} bytes leave no room for a stack"
     );
 }
+
+/// `Config::connect` (RRT-Connect's greedy step): across open space the reverse tree walks
+/// straight to the forward tree's first node and the goal joins in the first step, where trees
+/// that meet only within `sigma` need several steps to come that close.
+#[test]
+fn connect_joins_the_trees_across_open_space() {
+    let s = &builtin::OPEN;
+    // A free corridor between y = 30 and the top edge: 36 m from start to goal.
+    let (start, goal) = (Point::new(2.5, 35.5), Point::new(37.5, 35.5));
+    for connect in [true, false] {
+        for seed in 0..10 {
+            let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(2.0);
+            cfg.connect = connect;
+            cfg.max_expansions_per_call = 1;
+            let mut storage = Box::new(Storage::<N, B>::new());
+            let mut p: Planner<'_, '_, _, _, N, B, K> = Planner::new(
+                &mut storage,
+                Map::new(s.grid),
+                Euclidean,
+                XorShiftRng::seed_from_u64(seed),
+                cfg,
+                start,
+            )
+            .unwrap();
+            p.set_goal(goal).unwrap();
+            let clock = clock();
+            let steps = (1..=3).find(|_| p.grow(&clock).goal_in_tree);
+            if connect {
+                // A first forward node lies within e_max (5 m) of the start, above y = 30: the
+                // segment from the goal to it misses every box.
+                assert_eq!(
+                    steps,
+                    Some(1),
+                    "seed {seed}: the trees met in the first step"
+                );
+                assert!(p.stats().met);
+                p.tree().validate().unwrap();
+                let mut buf = [Point::ZERO; 64];
+                let info = p.path(&mut buf).unwrap();
+                assert!(info.to_goal && !info.blocked);
+                let path = &buf[..info.len];
+                assert_eq!(path.last(), Some(&goal));
+                for w in path.windows(2) {
+                    assert!(s.grid.segment_free(w[0], w[1]), "{w:?} crosses a box");
+                }
+            } else {
+                // Each tree grows at most 5 m per step: 3 steps leave them 6 m apart at best.
+                assert_eq!(steps, None, "seed {seed}");
+            }
+        }
+    }
+}

@@ -20,7 +20,7 @@ use std::rc::Rc;
 use std::sync::Arc;
 
 use bi_am_rrt::Point;
-use bi_am_rrt::metric::{DiffusionTable, Euclidean, Metric};
+use bi_am_rrt::metric::{DiffusionTable, Euclidean, Metric, Prepared};
 
 use crate::graph::GridGraph;
 
@@ -130,6 +130,20 @@ impl Metric for AnyMetric<'_> {
         match self {
             Self::Geodesic(g) => g.take_work(),
             _ => 0,
+        }
+    }
+
+    fn prepare(&self, p: Point) -> Prepared {
+        match self {
+            Self::Diffusion(t) => t.prepare(p),
+            _ => Prepared::plain(p),
+        }
+    }
+
+    fn distance_to(&self, a: Point, to: &Prepared) -> f32 {
+        match self {
+            Self::Diffusion(t) => t.distance_to(a, to),
+            _ => self.distance(a, to.point()),
         }
     }
 }

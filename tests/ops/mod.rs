@@ -170,6 +170,7 @@ fn run_with<M: Metric>(
     if flags & 32 != 0 {
         cfg.e_search = cfg.e_max * 3.0;
     }
+    cfg.connect = flags & 64 != 0;
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
