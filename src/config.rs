@@ -150,6 +150,14 @@ pub struct Config {
     /// adding each as a node, until it sees the new node (the trees meet) or a step is
     /// blocked. Off: trees meet only within `sigma` (the paper).
     pub connect: bool,
+    /// Path nodes offered their grandparent as parent per expansion once the goal is in the
+    /// tree (Theta*'s shortcut, see [`crate::rewire`]); 0 = none (the paper).
+    pub path_shortcuts: u16,
+    /// Once the goal is in the tree, the probability that a sample is drawn in the `e_max`
+    /// disc around a node of the current path instead (RRT*-Smart's beacons, Nasir et al.
+    /// 2013: after the shortcuts, the path's nodes are its corners, where a new node can still
+    /// shorten it); 0 = never (the paper).
+    pub p_beacon: f32,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -186,6 +194,8 @@ impl Config {
             e_search: 0.0,
             rewire_new: false,
             connect: false,
+            path_shortcuts: 0,
+            p_beacon: 0.0,
             profile: Profile::Paper,
         }
     }
@@ -205,7 +215,9 @@ impl Config {
     /// - `rewire_new`: a node added inside the ellipse rewires its neighbours (RRT*'s step);
     /// - `connect`: RRT-Connect's greedy step between the two trees while searching;
     /// - `p_goal` 0.5: half the samples are the goal while it is not in the tree (the paper
-    ///   samples it 30 % of the time).
+    ///   samples it 30 % of the time);
+    /// - `path_shortcuts` 4: the path straightens between its corner nodes (Theta*'s step);
+    /// - `p_beacon` 0.2: a fifth of the samples fall near the path's nodes (its corners).
     pub const fn tuned(mut self) -> Self {
         self.clock_every = 256;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
@@ -215,6 +227,8 @@ impl Config {
         self.rewire_new = true;
         self.connect = true;
         self.p_goal = 0.5;
+        self.path_shortcuts = 4;
+        self.p_beacon = 0.2;
         self.profile = Profile::Tuned;
         self
     }
@@ -340,6 +354,7 @@ impl Config {
             (self.max_work_per_call >= 1, ConfigError::MaxWork),
             (unit(self.p_goal), ConfigError::PGoal),
             (unit(self.p_uniform), ConfigError::PUniform),
+            (unit(self.p_beacon), ConfigError::PBeacon),
         ];
         match checks.iter().find(|(ok, _)| !ok) {
             Some(&(_, e)) => Err(e),
@@ -455,7 +470,7 @@ mod tests {
         }
         let base = Config::bi_am_rrt(MetricKind::Diffusion);
         type Case = (fn(&mut Config), ConfigError);
-        let cases: [Case; 12] = [
+        let cases: [Case; 13] = [
             (|c| c.e_max = f32::NAN, ConfigError::EMax),
             (|c| c.e_max = -1.0, ConfigError::EMax),
             (|c| c.e_max = f32::INFINITY, ConfigError::EMax),
@@ -463,6 +478,7 @@ mod tests {
             (|c| c.sigma = -3.0, ConfigError::Sigma),
             (|c| c.t_exp = Duration::ZERO, ConfigError::TExp),
             (|c| c.p_goal = 1.5, ConfigError::PGoal),
+            (|c| c.p_beacon = f32::NAN, ConfigError::PBeacon),
             (|c| c.p_uniform = f32::NAN, ConfigError::PUniform),
             (|c| c.n_max = 0, ConfigError::NMax),
             (|c| c.sample_attempts = 0, ConfigError::SampleAttempts),

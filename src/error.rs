@@ -79,6 +79,8 @@ error_enum! {
         PGoal => "p_goal must lie in [0, 1]",
         /// `p_uniform` is outside `[0, 1]` or NaN.
         PUniform => "p_uniform must lie in [0, 1]",
+        /// `p_beacon` is outside `[0, 1]` or NaN.
+        PBeacon => "p_beacon must lie in [0, 1]",
     }
 }
 

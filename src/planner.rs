@@ -448,9 +448,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
     /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N / 8)
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
-    /// parent candidates), each `2 + 2 e / cell` units at most (`e` the longer of `e_max`
-    /// and `e_search`), and with `rewire_new` up to 64 rewires around the new node; a
-    /// rewiring visit tests at
+    /// parent candidates, with `connect` up to 32 steps), each `2 + 2 e / cell` units at
+    /// most (`e` the longer of `e_max` and `e_search`; a meet, connect or shortcut segment at
+    /// most `2 + (width + height) / cell`), with `rewire_new` up to 64 rewires around the new
+    /// node and with `path_shortcuts` that many rewires on the path; a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). Measured
     /// (`host-sim frozen`, Bi-AM-RRT*(D) on the reference maps, N = 8192): calls ended within
     /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about
@@ -730,6 +731,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 if self.cfg.new_rewiring {
                     let slice = self.slice(meter, self.cfg.t_goal, call);
                     self.fwd.rewire_goal(&env, &goal, slice, true, meter);
+                }
+                if let (Some(g), n @ 1..) = (goal.node, self.cfg.path_shortcuts) {
+                    self.fwd.shortcut_path(&env, g, n, meter);
                 }
             }
             _ => {}

@@ -26,6 +26,10 @@
 //!   ellipse, `x_r2` offers itself as parent to the nodes near `x_r1`. The paper's `len(S) > 1
 //!   or ...` clearing test is read as `and` (the notes), i.e. the same "stopped approaching"
 //!   test as the first kind.
+//! - **Path shortcuts** (tuned configurations, [`crate::Config::path_shortcuts`]; not in the
+//!   paper): a cursor walks the path from the goal towards the root, a few nodes per
+//!   expansion, and offers each node its grandparent as parent (Theta*'s any-angle step, Nash
+//!   et al. 2007): the path straightens between the tree's corner nodes.
 //! - **Random rewiring** (RT-RRT*): new nodes (and the nearest node of rejected samples) are
 //!   queued; a dequeued node offers itself as parent to its neighbours and requeues those it
 //!   improved.
@@ -72,6 +76,40 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
             Err(_) => false,
         }
+    }
+
+    /// Path shortcuts ([`Config::path_shortcuts`], module docs): up to `tests` nodes of the
+    /// path to `goal`, from where the last call stopped, each offered its grandparent as
+    /// parent (kept while it shortens the path, as Theta* does); back to the goal after the
+    /// root.
+    pub(crate) fn shortcut_path<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        goal: NodeId,
+        tests: u16,
+        meter: &Meter<'_, C>,
+    ) {
+        // A cursor renamed or dropped by recycling names some other node or none: any node
+        // may be shortcut, so that only costs a pass.
+        let mut x = self
+            .shortcut_at
+            .filter(|x| x.index() < self.tree.len())
+            .unwrap_or(goal);
+        for _ in 0..tests {
+            meter.charge(1);
+            let grand = self
+                .tree
+                .parent(x)
+                .and_then(|p| Some((p, self.tree.parent(p)?)));
+            let Some((parent, grand)) = grand else {
+                x = goal; // the root or its child: a new pass
+                continue;
+            };
+            if !self.try_rewire(env, grand, x, meter) {
+                x = parent;
+            }
+        }
+        self.shortcut_at = Some(x);
     }
 
     /// Root rewiring, both kinds (module docs). `second_kind` enables Algorithm 4.
@@ -242,5 +280,79 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 self.goal_stack.clear();
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::FakeClock;
+    use crate::config::Config;
+    use crate::map::{Map, OccupancyGrid, pack_grid};
+    use crate::metric::Euclidean;
+
+    /// A zig-zag path of `points` below the root at `points[0]`; returns the last node.
+    fn zigzag(store: &mut TreeStore<64, 16>, points: &[Point]) -> NodeId {
+        store.reset(points[0]);
+        let mut last = NodeId(0);
+        for p in &points[1..] {
+            last = store.insert(*p, last, false).unwrap();
+        }
+        last
+    }
+
+    #[test]
+    fn path_shortcuts_straighten_the_path_and_keep_it_free() {
+        // 20 x 20 m; a wall at row 10 over columns 0-11 (the way round is past column 12).
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        pack_grid(&mut bits, 20, 20, |c, r| r == 10 && c < 12).unwrap();
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
+        let cfg = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+        let env = Env {
+            map: &map,
+            metric: &Euclidean,
+            cfg: &cfg,
+            call: Deadline::NEVER,
+        };
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        let mut store = TreeStore::<64, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        let pts = [
+            (2.5, 2.5),
+            (6.5, 4.5),
+            (4.5, 7.5),
+            (10.5, 6.5),
+            (14.5, 9.5),
+            (13.5, 12.5),
+            (8.5, 14.5),
+            (6.5, 17.5),
+            (2.5, 16.5),
+        ]
+        .map(|(x, y)| Point::new(x, y));
+        let goal = zigzag(&mut store, &pts);
+        let before = store.cost(goal).length;
+        for _ in 0..20 {
+            store.shortcut_path(&env, goal, 4, &meter);
+        }
+        let after = store.cost(goal).length;
+        store.tree.validate().unwrap();
+        // Every edge of the path is free, and the path still goes round the wall's end.
+        let mut x = goal;
+        let mut hops = 0;
+        while let Some(p) = store.tree.parent(x) {
+            assert!(map.free_path(store.pos(p), store.pos(x)));
+            x = p;
+            hops += 1;
+        }
+        assert_eq!(x, NodeId(0));
+        // Straight through the corner nodes (10.5, 6.5) or (14.5, 9.5) and (13.5, 12.5).
+        assert!(after < before - 5.0, "{before} -> {after}");
+        assert!(hops <= 4, "{hops} edges left");
+        let direct = pts[0].dist(pts[8]);
+        assert!(
+            after > direct,
+            "the wall is in the way: {after} vs {direct}"
+        );
     }
 }

@@ -32,7 +32,7 @@
 use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config};
 use crate::error::TreeError;
-use crate::geometry::{Ellipse, Point, sample_disc};
+use crate::geometry::{Ellipse, Point, sample_disc, unit_f32};
 use crate::index::SpatialIndex;
 use crate::map::Map;
 use crate::metric::{Metric, Prepared};
@@ -87,6 +87,8 @@ pub struct TreeStore<const N: usize, const B: usize> {
     pub(crate) goal_stack: NodeStack<SWEEP_CAP>,
     /// Goal rewiring's queue; RT-RRT*'s random-rewiring queue.
     pub(crate) goal_queue: NodeQueue<SWEEP_CAP>,
+    /// Where the path shortcuts ([`Config::path_shortcuts`]) go on (`None`: at the goal).
+    pub(crate) shortcut_at: Option<NodeId>,
 }
 
 impl<const N: usize, const B: usize> Default for TreeStore<N, B> {
@@ -104,6 +106,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             root_queue: NodeQueue::new(),
             goal_stack: NodeStack::new(),
             goal_queue: NodeQueue::new(),
+            shortcut_at: None,
         }
     }
 
@@ -142,6 +145,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         self.goal_stack.clear();
         self.goal_queue.clear();
         self.tree.clear_marks(Mark::Goal);
+        self.shortcut_at = None;
     }
 
     /// Adds a node and indexes it.
@@ -469,14 +473,21 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     ) -> Option<(NodeId, bool)> {
         let cfg = env.cfg;
         let view = target.as_deref().map(|t| self.goal_view(env, t, meter));
-        let x_rand = sample_state(
-            rng,
-            env.map,
-            view.as_ref(),
-            cfg.p_goal,
-            cfg.p_uniform,
-            cfg.sample_attempts,
-        )?;
+        let beacon = match (target.as_deref(), &view) {
+            (Some(t), Some(v)) if v.ellipse.is_some() => self.beacon_sample(env, rng, t, meter),
+            _ => None,
+        };
+        let x_rand = match beacon {
+            Some(p) => p,
+            None => sample_state(
+                rng,
+                env.map,
+                view.as_ref(),
+                cfg.p_goal,
+                cfg.p_uniform,
+                cfg.sample_attempts,
+            )?,
+        };
         meter.charge(4);
         let x_nearest = self.nearest(env, x_rand, meter)?;
         // Longer steps while this tree's goal is not in it (tuned configurations).
@@ -569,6 +580,30 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             from = self.insert(next, from, false).ok()?;
         }
         None
+    }
+
+    /// With probability [`Config::p_beacon`] (no draw at all when it is 0): a free state in the
+    /// `e_max` disc around a uniformly chosen node of the path to the joined goal.
+    fn beacon_sample<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
+        &self,
+        env: &Env<'_, '_, M, K>,
+        rng: &mut R,
+        target: &Target,
+        meter: &Meter<'_, C>,
+    ) -> Option<Point> {
+        let p = env.cfg.p_beacon;
+        if p <= 0.0 || unit_f32(rng) >= p {
+            return None;
+        }
+        let goal = target.node?;
+        let depth = self.tree.depth(goal)?;
+        let mut b = goal;
+        for _ in 0..rng.next_u32().checked_rem(units(depth).saturating_add(1))? {
+            b = self.tree.parent(b)?;
+        }
+        meter.charge(units(depth).saturating_add(4));
+        let s = sample_disc(rng, self.pos(b), env.cfg.e_max);
+        env.map.free_point(s).then_some(s)
     }
 
     /// Inserts a node below `parent` (its edge free). When the arena is full, one leaf is
@@ -803,6 +838,65 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Beacon samples ([`Config::p_beacon`]) fall within `e_max` of a node of the path to the
+    /// goal, near every one of them over many draws; with `p_beacon` 0 nothing is drawn.
+    #[test]
+    fn beacon_samples_fall_near_the_path() {
+        use rand_core::SeedableRng;
+        let bits = [0u8; OccupancyGrid::bytes_needed(40, 40)];
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 40, 40, 1.0).unwrap());
+        let mut store = TreeStore::<64, 16>::new();
+        assert!(store.index.reshape(40.0, 40.0, 5.0));
+        store.reset(Point::new(2.0, 2.0));
+        // A side branch (not on the path) and the path root -> a -> b -> goal.
+        store
+            .insert(Point::new(35.0, 5.0), NodeId(0), false)
+            .unwrap();
+        let a = store
+            .insert(Point::new(10.0, 10.0), NodeId(0), false)
+            .unwrap();
+        let b = store.insert(Point::new(20.0, 20.0), a, false).unwrap();
+        let goal = store.insert(Point::new(30.0, 35.0), b, false).unwrap();
+        let path = [NodeId(0), a, b, goal].map(|id| store.pos(id));
+        let target = Target {
+            pos: path[3],
+            node: Some(goal),
+        };
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        let paper = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+        let mut cfg = paper;
+        cfg.p_beacon = 1.0;
+        let env_paper = Env {
+            map: &map,
+            metric: &crate::metric::Euclidean,
+            cfg: &paper,
+            call: Deadline::NEVER,
+        };
+        let env = Env {
+            cfg: &cfg,
+            ..env_paper
+        };
+        let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(5);
+        let untouched = rng.clone();
+        assert_eq!(
+            store.beacon_sample(&env_paper, &mut rng, &target, &meter),
+            None
+        );
+        assert_eq!(rng, untouched, "p_beacon 0 draws nothing");
+        let mut near = [0; 4];
+        for _ in 0..400 {
+            let Some(p) = store.beacon_sample(&env, &mut rng, &target, &meter) else {
+                continue;
+            };
+            let i = (0..4)
+                .find(|&i| p.dist(path[i]) <= cfg.e_max)
+                .expect("within e_max of a path node");
+            near[i] += 1;
+        }
+        assert!(near.iter().all(|&n| n > 30), "{near:?}"); // the root's disc is partly off the map
     }
 
     /// Issue 8: an expansion in progress was not checked against the call's deadline; the

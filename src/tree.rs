@@ -271,6 +271,21 @@ impl<const N: usize> Tree<N> {
         (p != NONE).then_some(NodeId(p))
     }
 
+    /// Edges from a node up to the root (`None` for an unknown id): at most `len` steps.
+    pub fn depth(&self, id: NodeId) -> Option<usize> {
+        if !self.contains(id) {
+            return None;
+        }
+        let mut v = id;
+        for d in 0..self.len as usize {
+            match self.parent(v) {
+                Some(p) => v = p,
+                None => return Some(d),
+            }
+        }
+        None // a cycle (never in a valid tree)
+    }
+
     /// The first child of a node (the most recently attached), if any.
     pub fn first_child(&self, id: NodeId) -> Option<NodeId> {
         if !self.contains(id) {

@@ -171,6 +171,10 @@ fn run_with<M: Metric>(
         cfg.e_search = cfg.e_max * 3.0;
     }
     cfg.connect = flags & 64 != 0;
+    if flags & 128 != 0 {
+        cfg.path_shortcuts = 4;
+        cfg.p_beacon = 0.2;
+    }
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
