@@ -151,7 +151,7 @@ pub struct Config {
     /// blocked. Off: trees meet only within `sigma` (the paper).
     pub connect: bool,
     /// Path nodes offered their grandparent as parent per expansion once the goal is in the
-    /// tree (Theta*'s shortcut, see [`crate::rewire`]); 0 = none (the paper).
+    /// tree (Theta*'s shortcut; module `rewire`); 0 = none (the paper).
     pub path_shortcuts: u16,
     /// Once the goal is in the tree, the probability that a sample is drawn in the `e_max`
     /// disc around a node of the current path instead (RRT*-Smart's beacons, Nasir et al.

@@ -8,7 +8,8 @@
 //! then, until `t_exp` has passed on the caller's clock (or `max_expansions_per_call` is
 //! reached): expand the forward tree; then rewire it from the root for `t_root`; then, once the goal is
 //! in it, goal rewiring for `t_goal` (and the second kind for another `t_goal` with the new
-//! rewiring) — RT-RRT* runs its random rewiring for `t_goal` instead. While the goal is not in
+//! rewiring), then `path_shortcuts` shortcuts of the path (tuned) — RT-RRT* runs its random
+//! rewiring for `t_goal` instead. While the goal is not in
 //! the forward tree and bidirectional search is on, each step also expands the reverse tree
 //! (rooted at the goal, growing towards the agent's position when the goal was set) and
 //! rewires it from its root.
@@ -39,7 +40,9 @@
 //! tested for a free segment in cost order, and the first free one is taken. The reverse tree's
 //! trunk (from `b` to the goal) is then grafted below `a`, each edge keeping its blocked flag,
 //! so the goal joins the forward tree; the reverse tree is emptied and search continues with the
-//! forward tree alone. Search time is read when the goal joins, not at the end of the call.
+//! forward tree alone. With `connect` (tuned configurations), a node that meets nothing within
+//! `sigma` makes the other tree walk straight towards it from its nearest node, in free steps
+//! of `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. Search time is read when the goal joins, not at the end of the call.
 //!
 //! # Dynamic obstacles
 //!

@@ -4,6 +4,11 @@
 //! An expansion samples a state, finds `Nearest`, steers towards the sample, and adds the new
 //! state below the neighbour that gives it the lowest cost over a free segment:
 //!
+//! - Sampling: [`crate::sample`]; with `p_beacon` (tuned), once the goal is joined, a share of
+//!   the samples falls in the `e_max` disc around a node of the current path instead
+//!   (RRT*-Smart's beacons).
+//! - RRT-Connect's greedy step (`TreeStore::connect`, tuned `connect`): the planner makes
+//!   the other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
 //!   is Euclidean; otherwise the node nearest by the assisting metric (a scan of the tree; the
 //!   Euclidean nearest if the metric cannot place `x`).
@@ -12,7 +17,9 @@
 //!   with a non-Euclidean metric draws `steer_candidates` states in the disc of radius
 //!   `min(e_max, d_E)` around the nearest node and keeps the free one closest to the sample by
 //!   the metric (a fixed number of candidates instead of the reference's fixed 2 ms, so a fast
-//!   implementation does not pay milliseconds per sample); AM-RRT*(E) steps towards the first
+//!   implementation does not pay milliseconds per sample; candidates are ranked by the metric
+//!   and their segments tested in that order, which picks the same one with fewer segment
+//!   tests); AM-RRT*(E) steps towards the first
 //!   obstacle and stops short of it (bisection of the free prefix); RT-RRT* gives up.
 //! - The node is added when the neighbourhood holds fewer than `n_max` nodes, or the sample was
 //!   farther than `e_max` from its nearest node, or the new state is the goal. With
@@ -45,7 +52,7 @@ use rand_core::Rng;
 /// Most neighbours one `Nearby` query hands to the planner (more are counted, not used).
 pub const NEAR_CAP: usize = 64;
 
-/// Most nodes one greedy connection ([`TreeStore::connect`]) adds.
+/// Most nodes one greedy connection (RRT-Connect's step, [`Config::connect`]) adds.
 pub const CONNECT_STEPS: usize = 32;
 
 /// Steering candidates ranked at once (more are drawn in several batches).
