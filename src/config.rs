@@ -208,7 +208,7 @@ impl Config {
     ///   expansions, the same rewiring work per second;
     /// - `e_search` 15 m: long steps until the first solution (the edges are tested free as
     ///   any other; rewiring shortens them later);
-    /// - `n_max_informed` 8 `n_max`: the tree densifies inside the informed ellipse after the
+    /// - `n_max_informed` 4 `n_max`: the tree densifies inside the informed ellipse after the
     ///   density rule has saturated the rest of the map;
     /// - `recycle_when_full`: a full arena trades leaves that cannot improve the path for
     ///   states that can;
@@ -222,7 +222,7 @@ impl Config {
         self.clock_every = 256;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
         self.e_search = 15.0;
-        self.n_max_informed = self.n_max.saturating_mul(8);
+        self.n_max_informed = self.n_max.saturating_mul(4);
         self.recycle_when_full = true;
         self.rewire_new = true;
         self.connect = true;
