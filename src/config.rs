@@ -263,6 +263,16 @@ impl Config {
         self
     }
 
+    /// The steering step while a tree's goal is not in it: `e_search`, or `e_max` when that
+    /// is 0.
+    pub fn search_step(&self) -> f32 {
+        if self.e_search > 0.0 {
+            self.e_search
+        } else {
+            self.e_max
+        }
+    }
+
     /// With the new rewiring on or off.
     pub const fn with_new_rewiring(mut self, on: bool) -> Self {
         self.new_rewiring = on;

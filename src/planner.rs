@@ -42,7 +42,8 @@
 //! so the goal joins the forward tree; the reverse tree is emptied and search continues with the
 //! forward tree alone. With `connect` (tuned configurations), a node that meets nothing within
 //! `sigma` makes the other tree walk straight towards it from its nearest node, in free steps
-//! of `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. Search time is read when the goal joins, not at the end of the call.
+//! of `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. Search
+//! time is read when the goal joins, not at the end of the call.
 //!
 //! # Dynamic obstacles
 //!
@@ -795,11 +796,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             cfg: &self.cfg,
             call: self.call,
         };
-        let step = if self.cfg.e_search > 0.0 {
-            self.cfg.e_search
-        } else {
-            self.cfg.e_max
-        };
+        let step = self.cfg.search_step();
         let pair = if forward {
             let p = self.fwd.pos(new);
             self.rev.connect(&env, p, step, meter).map(|b| (new, b))
@@ -807,12 +804,20 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             let p = self.rev.pos(new);
             self.fwd.connect(&env, p, step, meter).map(|a| (a, new))
         };
-        if let Some((a, b)) = pair
-            && self.graft(a, b, meter)
-        {
+        if let Some((a, b)) = pair {
+            self.meet(a, b, meter);
+        }
+    }
+
+    /// Grafts the reverse tree below forward node `a` at reverse node `b` (their segment tested
+    /// free) and records the goal joining; returns whether the graft was made.
+    fn meet<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {
+        let met = self.graft(a, b, meter);
+        if met {
             self.stats.met = true;
             self.goal_joined(meter);
         }
+        met
     }
 
     /// Meet test for a node just added to one tree (`forward` tells which) against the other,
@@ -871,12 +876,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         } else {
             (partner, new)
         };
-        let met = self.graft(a, b, meter);
-        if met {
-            self.stats.met = true;
-            self.goal_joined(meter);
-        }
-        met
+        self.meet(a, b, meter)
     }
 
     /// Grafts the reverse tree's trunk from `b` to its root (the goal) below forward node `a`,

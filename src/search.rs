@@ -499,8 +499,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let x_nearest = self.nearest(env, x_rand, meter)?;
         // Longer steps while this tree's goal is not in it (tuned configurations).
         let searching = target.as_deref().is_some_and(|t| t.node.is_none());
-        let step = if searching && cfg.e_search > 0.0 {
-            cfg.e_search
+        let step = if searching {
+            cfg.search_step()
         } else {
             cfg.e_max
         };
