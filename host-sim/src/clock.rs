@@ -61,7 +61,9 @@ pub fn virtual_clock(ns_per_unit: u64) -> FakeClock {
 }
 
 /// Which clock a run uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum ClockKind {
     /// Work-driven, repeatable.

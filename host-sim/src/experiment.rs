@@ -1,37 +1,43 @@
-//! The experiment runner: planners x scenarios x repeats under the agent protocol, in parallel
-//! on all cores, written to `runs.csv` (one row per run and goal) and `summary.csv` (medians
-//! per planner, scenario and goal).
+//! The experiment matrix: planners x scenarios x repeats under the agent protocol, in parallel
+//! on all cores, into a results folder (`results`): each run's rows are appended to
+//! `runs.csv` as the run ends, so an interrupted matrix keeps its finished runs and
+//! `--resume` does only the rest; `--shard K/N` runs a deterministic slice (for a job array
+//! across machines) and `merge` joins the slices.
 //!
 //! Per run (seed = first seed + repeat index, the same seeds for every planner):
 //! - the goal sequence (goal 1, or all goals) is driven under `bi_am_rrt::agent`'s protocol;
 //! - with `--anytime-ms`, a second planner with the same seed plans towards goal 1 without
 //!   moving for that long, and the cost of its path to the goal is recorded (the paper does
-//!   not report this; the issue asks for it).
+//!   not report this).
 
+use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use bi_am_rrt::agent::Protocol;
-use bi_am_rrt::clock::Clock;
 use bi_am_rrt::{Config, RewireMode};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use serde::Serialize;
 
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::maps::Scenario;
+pub use crate::results::Goals;
+use crate::results::{
+    Manifest, MapTimes, Row, RowSink, RunKey, ScenarioId, Settings, Shard, Summary,
+};
 use crate::sim::{Prepared, drive, with_planner};
-use crate::stats::{mean, median};
 
-/// Which goals a run drives through.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Goals {
-    /// Start to goal 1 (the Bi-AM-RRT* paper's static experiment).
-    First,
-    /// The whole sequence (the AM-RRT* paper's benchmark).
-    All,
+/// What to do with a results folder that already holds an experiment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Existing {
+    /// Stop with an error (the default: hours of results are not overwritten by mistake).
+    Refuse,
+    /// Run only the runs the folder does not hold yet (same settings required).
+    Resume,
+    /// Delete its results and start again.
+    Overwrite,
 }
 
 /// Everything the runner needs.
@@ -62,13 +68,17 @@ pub struct ExperimentArgs {
     pub table: crate::diffusion::TableOptions,
     /// Overrides every planner's `t_exp` (the paper: 150 ms).
     pub t_exp: Option<Duration>,
+    /// Only this slice of the matrix.
+    pub shard: Option<Shard>,
+    /// An output folder that already holds results.
+    pub existing: Existing,
     /// Output directory.
     pub out: PathBuf,
 }
 
-/// `all` or a comma-separated list of Table 1 names.
+/// `all` or a comma-separated list of Table 1 names (any case, optionally ` tuned`).
 pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
-    if spec == "all" {
+    if spec.trim().eq_ignore_ascii_case("all") {
         return Ok(Config::table1().to_vec());
     }
     spec.split(',')
@@ -94,63 +104,45 @@ pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
         .collect()
 }
 
-/// One row of `runs.csv`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Row {
-    pub planner: String,
-    pub scenario: String,
-    pub goal_index: usize,
-    pub seed: u64,
-    pub reached: bool,
-    pub search_time_s: Option<f64>,
-    pub path_length_m: f32,
-    /// The leg's exact optimum (from where the agent stood when the goal was set).
-    pub optimal_m: Option<f32>,
-    /// `path_length_m / optimal_m` for a reached goal.
-    pub travelled_ratio: Option<f32>,
-    pub collisions: u32,
-    pub nodes_at_goal: Option<usize>,
-    pub calls: u32,
-    pub cost_at_start_m: Option<f32>,
-    pub anytime_cost_m: Option<f32>,
-    pub final_nodes: usize,
-    pub clock: ClockKind,
-    pub run_wall_s: f64,
+/// The planners as the runs use them (the switches applied).
+fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
+    args.planners
+        .iter()
+        .map(|c| {
+            let mut c = *c;
+            if args.faithful {
+                c.rewire_mode = RewireMode::Faithful;
+            }
+            if let Some(t) = args.t_exp {
+                c.t_exp = t;
+            }
+            if args.keep_reverse_branches {
+                c.keep_reverse_branches = true;
+            }
+            c
+        })
+        .collect()
 }
 
-/// One row of `summary.csv`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Summary {
-    pub planner: String,
-    pub scenario: String,
-    pub goal_index: usize,
-    pub runs: usize,
-    pub reached: usize,
-    pub collisions: u32,
-    #[serde(serialize_with = "short")]
-    pub search_time_median_s: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub search_time_mean_s: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub path_length_median_m: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub path_length_mean_m: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub travelled_ratio_median: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub travelled_ratio_max: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub nodes_at_goal_median: Option<f64>,
-    #[serde(serialize_with = "short")]
-    pub anytime_cost_median_m: Option<f64>,
-}
-
-/// A statistic in the files at the precision of its `f32` inputs (shortest `f32` form:
-/// `68.88539`, not the `68.88539123535156` of its `f64` sum).
-fn short<S: serde::Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
-    match v {
-        Some(x) => s.serialize_some(&(*x as f32)),
-        None => s.serialize_none(),
+/// The settings a results folder records for these arguments.
+pub fn settings(args: &ExperimentArgs) -> Settings {
+    let t = &args.table;
+    Settings {
+        scenarios: args.scenarios.iter().map(ScenarioId::of).collect(),
+        planners: args.planners.iter().map(|c| c.name().to_string()).collect(),
+        repeats: args.repeats,
+        seed: args.seed,
+        clock: args.clock,
+        goals: args.goals,
+        faithful: args.faithful,
+        keep_reverse_branches: args.keep_reverse_branches,
+        search_only: args.search_only,
+        anytime_ms: args.anytime_ms,
+        t_exp_ms: args.t_exp.map(|d| d.as_secs_f64() * 1e3),
+        table: format!(
+            "{:?} {:?} coarsen {} max_bytes {}",
+            t.kind, t.layout, t.coarsen, t.max_bytes
+        ),
     }
 }
 
@@ -191,7 +183,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         c.t_exp = Duration::from_millis(args.anytime_ms);
         with_planner(prep, c, seed, |p| {
             p.set_goal(prep.scenario.goals[0])
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+                .map_err(|e| anyhow!("{e}"))?;
             let progress = match args.clock {
                 ClockKind::Wall => p.grow(&WallClock::new()),
                 ClockKind::Virtual => p.grow(&virtual_clock(VIRTUAL_NS_PER_UNIT)),
@@ -247,83 +239,140 @@ pub fn row(
     }
 }
 
-/// Groups rows by planner, scenario and goal, in first-seen order.
-pub fn summarise(rows: &[Row]) -> Vec<Summary> {
-    let mut keys: Vec<(String, String, usize)> = Vec::new();
-    for r in rows {
-        let k = (r.planner.clone(), r.scenario.clone(), r.goal_index);
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    keys.into_iter()
-        .map(|(planner, scenario, goal_index)| {
-            let group: Vec<&Row> = rows
+/// The runs `rows` holds in full: every goal the run drives, or up to the first goal it did
+/// not reach. Rows of a run cut short by an interruption do not count (the run is done again).
+fn complete_runs(rows: &[Row], scenarios: &[Scenario], goals: Goals) -> BTreeSet<RunKey> {
+    let mut keys: BTreeSet<RunKey> = rows.iter().map(Row::key).collect();
+    keys.retain(|k| {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.key() == *k).collect();
+        let wanted = match goals {
+            Goals::First => 1,
+            Goals::All => scenarios
                 .iter()
-                .filter(|r| {
-                    r.planner == planner && r.scenario == scenario && r.goal_index == goal_index
+                .find(|s| s.name == k.scenario)
+                .map_or(usize::MAX, |s| s.goals.len()),
+        };
+        let last = mine.iter().map(|r| r.goal_index).max().unwrap_or(0);
+        let contiguous = (1..=last).all(|g| mine.iter().filter(|r| r.goal_index == g).count() == 1);
+        contiguous && (last >= wanted || mine.iter().any(|r| !r.reached))
+    });
+    keys
+}
+
+/// Bakes what the planners need and times each map's processing.
+fn prepare(
+    preps: &[Prepared],
+    planners: &[Config],
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<MapTimes>> {
+    let needs_d = planners
+        .iter()
+        .any(|c| c.metric == bi_am_rrt::MetricKind::Diffusion);
+    pool.install(|| {
+        preps
+            .par_iter()
+            .map(|p| -> Result<MapTimes> {
+                let table_bytes = if needs_d {
+                    Some(p.diffusion()?.table.len())
+                } else {
+                    None
+                };
+                let t0 = Instant::now();
+                let graph = p.graph();
+                let graph_s = t0.elapsed().as_secs_f64();
+                let (geodesic_field_s, _) = crate::bake::geodesic_costs(&graph, 5, false);
+                let t0 = Instant::now();
+                p.optima();
+                let optima_s = t0.elapsed().as_secs_f64();
+                let g = &p.scenario.map;
+                Ok(MapTimes {
+                    scenario: p.scenario.name.clone(),
+                    cols: g.width,
+                    rows: g.height,
+                    cell_m: f32::from_bits(g.cell_bits),
+                    diffusion_bake_s: p.bake_seconds.get().copied(),
+                    table_bytes,
+                    graph_s,
+                    geodesic_field_s,
+                    optima_s,
                 })
-                .collect();
-            let reached: Vec<&&Row> = group.iter().filter(|r| r.reached).collect();
-            let mut search: Vec<f64> = group.iter().filter_map(|r| r.search_time_s).collect();
-            let mut len: Vec<f64> = reached.iter().map(|r| r.path_length_m as f64).collect();
-            let mut nodes: Vec<f64> = group
-                .iter()
-                .filter_map(|r| r.nodes_at_goal.map(|n| n as f64))
-                .collect();
-            let mut any: Vec<f64> = group
-                .iter()
-                .filter_map(|r| r.anytime_cost_m.map(|c| c as f64))
-                .collect();
-            let mut ratio: Vec<f64> = reached
-                .iter()
-                .filter_map(|r| r.travelled_ratio.map(f64::from))
-                .collect();
-            let ratio_max = ratio.iter().copied().reduce(f64::max);
-            Summary {
-                travelled_ratio_median: median(&mut ratio),
-                travelled_ratio_max: ratio_max,
-                runs: group.len(),
-                reached: reached.len(),
-                collisions: group.iter().map(|r| r.collisions).sum(),
-                search_time_mean_s: mean(&search),
-                search_time_median_s: median(&mut search),
-                path_length_mean_m: mean(&len),
-                path_length_median_m: median(&mut len),
-                nodes_at_goal_median: median(&mut nodes),
-                anytime_cost_median_m: median(&mut any),
-                planner,
-                scenario,
-                goal_index,
+            })
+            .collect()
+    })
+}
+
+/// What a call of `run` did.
+#[derive(Debug)]
+pub struct Outcome {
+    /// Runs of the folder's matrix (its shard).
+    pub runs: usize,
+    /// Runs done by this call.
+    pub ran: usize,
+    /// The folder's summary.
+    pub summary: Vec<Summary>,
+}
+
+/// Runs the experiment (or what the folder still lacks) and writes its files.
+pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
+    if args.scenarios.is_empty() || args.planners.is_empty() || args.repeats == 0 {
+        bail!("nothing to run (no scenario, no planner or no repeat)");
+    }
+    let planners = planners_of(args);
+    let out = &args.out;
+    std::fs::create_dir_all(out).with_context(|| format!("{}", out.display()))?;
+    let settings = settings(args);
+    let old = crate::results::Manifest::read(out)?;
+    let has_rows = out.join(crate::results::RUNS).exists();
+    match (args.existing, &old) {
+        (Existing::Refuse, _) if old.is_some() || has_rows => bail!(
+            "{} already holds an experiment's results: --resume continues it (same settings), \
+             --overwrite deletes them and starts again, or choose another --out",
+            out.display()
+        ),
+        (Existing::Resume, Some(m)) => {
+            if let Some(d) = settings.difference(&m.settings) {
+                bail!(
+                    "--resume: {} was run with other settings ({d})",
+                    out.display()
+                );
             }
-        })
-        .collect()
-}
+            if m.shard != args.shard {
+                bail!(
+                    "--resume: {} holds shard {}, not {}",
+                    out.display(),
+                    m.shard.map_or("all".into(), |s| s.to_string()),
+                    args.shard.map_or("all".into(), |s| s.to_string())
+                );
+            }
+        }
+        (Existing::Resume, None) if has_rows => bail!(
+            "--resume: {} has runs.csv but no experiment.json",
+            out.display()
+        ),
+        (Existing::Overwrite, _) => {
+            for f in [
+                crate::results::MANIFEST,
+                crate::results::RUNS,
+                "runs.json",
+                "summary.csv",
+                "summary.json",
+            ] {
+                let p = out.join(f);
+                if p.exists() {
+                    std::fs::remove_file(&p).with_context(|| format!("{}", p.display()))?;
+                }
+            }
+        }
+        _ => {}
+    }
+    let mut rows = if args.existing == Existing::Resume {
+        crate::results::read_rows(out, true)?
+    } else {
+        Vec::new()
+    };
+    let done = complete_runs(&rows, &args.scenarios, args.goals);
+    rows.retain(|r| done.contains(&r.key()));
 
-fn fmt_opt(v: Option<f64>, scale: f64, prec: usize) -> String {
-    v.map_or_else(|| "-".into(), |x| format!("{:.*}", prec, x * scale))
-}
-
-/// Runs the experiment and writes its files.
-pub fn run(args: &ExperimentArgs) -> Result<()> {
-    if args.scenarios.is_empty() || args.planners.is_empty() {
-        bail!("nothing to run");
-    }
-    let mut planners = args.planners.clone();
-    if args.faithful {
-        planners
-            .iter_mut()
-            .for_each(|c| c.rewire_mode = RewireMode::Faithful);
-    }
-    if let Some(t) = args.t_exp {
-        planners.iter_mut().for_each(|c| c.t_exp = t);
-    }
-    if args.keep_reverse_branches {
-        planners
-            .iter_mut()
-            .for_each(|c| c.keep_reverse_branches = true);
-    }
-    std::fs::create_dir_all(&args.out)?;
     let jobs = args
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -338,256 +387,140 @@ pub fn run(args: &ExperimentArgs) -> Result<()> {
         .map(|s| Prepared::with_table(s, args.table))
         .collect();
     // Bake what the planners need before timing anything.
-    let needs_d = planners
-        .iter()
-        .any(|c| c.metric == bi_am_rrt::MetricKind::Diffusion);
-    pool.install(|| {
-        preps.par_iter().try_for_each(|p| -> Result<()> {
-            if needs_d {
-                p.diffusion()?;
-            }
-            p.graph();
-            p.optima();
-            Ok(())
-        })
-    })?;
-    for p in &preps {
-        if let (Some(s), Ok(b)) = (p.bake_seconds.get(), p.diffusion()) {
+    let maps = prepare(&preps, &planners, &pool)?;
+    for m in &maps {
+        if let (Some(s), Some(b)) = (m.diffusion_bake_s, m.table_bytes) {
             eprintln!(
-                "{}: diffusion table ({} bytes) baked in {s:.3} s",
-                p.scenario.name,
-                b.table.len()
+                "{}: diffusion table ({b} bytes) baked in {s:.3} s",
+                m.scenario
             );
         }
     }
-    let mut jobs_list = Vec::new();
-    for (si, _) in preps.iter().enumerate() {
-        for cfg in &planners {
-            for r in 0..args.repeats {
-                jobs_list.push((si, *cfg, args.seed + r as u64));
-            }
+    let manifest = Manifest {
+        tool: format!("host-sim {}", env!("CARGO_PKG_VERSION")),
+        settings,
+        shard: args.shard,
+        maps,
+    };
+    manifest.write(out)?;
+    // Rewrite the kept rows (an interrupted run's partial rows are gone), then append.
+    if args.existing == Existing::Resume {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for r in &rows {
+            w.serialize(r)?;
         }
+        crate::results::write_atomic(
+            &out.join(crate::results::RUNS),
+            &w.into_inner().map_err(|e| anyhow!("{e}"))?,
+        )?;
     }
-    let bar = ProgressBar::new(jobs_list.len() as u64);
+    let wanted = manifest.runs();
+    let todo: Vec<(usize, Config, u64)> = wanted
+        .iter()
+        .filter(|k| !done.contains(k))
+        .map(|k| {
+            let si = preps
+                .iter()
+                .position(|p| p.scenario.name == k.scenario)
+                .context("scenario")?;
+            let cfg = planners
+                .iter()
+                .find(|c| c.name().to_string() == k.planner)
+                .copied()
+                .context("planner")?;
+            Ok((si, cfg, k.seed))
+        })
+        .collect::<Result<_>>()?;
+    eprintln!(
+        "{}: {} runs{}, {} already done, {} to run on {jobs} threads",
+        out.display(),
+        wanted.len(),
+        args.shard
+            .map(|s| format!(" (shard {s})"))
+            .unwrap_or_default(),
+        wanted.len() - todo.len(),
+        todo.len()
+    );
+    let bar = ProgressBar::new(todo.len() as u64);
     bar.set_style(
         ProgressStyle::with_template(
             "{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta} {msg}",
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let rows = Mutex::new(Vec::new());
+    let sink = Mutex::new(RowSink::open(out)?);
+    let fresh = Mutex::new(Vec::new());
     let result: Result<()> = pool.install(|| {
-        jobs_list.par_iter().try_for_each(|&(si, cfg, seed)| {
+        todo.par_iter().try_for_each(|&(si, cfg, seed)| {
             let r = one_run(&preps[si], cfg, seed, args).with_context(|| {
                 format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name)
             })?;
-            rows.lock()
-                .map_err(|_| anyhow::anyhow!("poisoned"))?
-                .extend(r);
+            sink.lock().map_err(|_| anyhow!("poisoned"))?.append(&r)?;
+            fresh.lock().map_err(|_| anyhow!("poisoned"))?.extend(r);
             bar.inc(1);
             Ok(())
         })
     });
     bar.finish();
     result?;
-    let mut rows = rows.into_inner().map_err(|_| anyhow::anyhow!("poisoned"))?;
-    // Deterministic file order whatever the scheduling.
-    let order = |r: &Row| {
-        (
-            preps.iter().position(|p| p.scenario.name == r.scenario),
-            planners
-                .iter()
-                .position(|c| c.name().to_string() == r.planner),
-            r.seed,
-            r.goal_index,
-        )
-    };
-    rows.sort_by_key(order);
-    let mut w = csv::Writer::from_path(args.out.join("runs.csv"))?;
-    for r in &rows {
-        w.serialize(r)?;
-    }
-    w.flush()?;
-    let summary = summarise(&rows);
-    let mut w = csv::Writer::from_path(args.out.join("summary.csv"))?;
-    for s in &summary {
-        w.serialize(s)?;
-    }
-    w.flush()?;
+    rows.extend(fresh.into_inner().map_err(|_| anyhow!("poisoned"))?);
+    let summary = crate::results::write_complete(out, &manifest.settings, &mut rows)?;
+    print_summary(&summary);
     println!(
-        "{:<22} {:<10} {:>4} {:>8} {:>5} {:>12} {:>12} {:>10} {:>10} {:>8} {:>8} {:>9}",
+        "wrote {} ({} runs), runs.json, summary.csv and summary.json",
+        out.join(crate::results::RUNS).display(),
+        wanted.len()
+    );
+    Ok(Outcome {
+        runs: wanted.len(),
+        ran: todo.len(),
+        summary,
+    })
+}
+
+fn fmt_opt(v: Option<f64>, scale: f64, prec: usize) -> String {
+    v.map_or_else(|| "-".into(), |x| format!("{:.*}", prec, x * scale))
+}
+
+/// Prints the summary as a table (medians and interquartile ranges).
+pub fn print_summary(summary: &[Summary]) {
+    println!(
+        "{:<22} {:<10} {:>4} {:>8} {:>5} {:>24} {:>24} {:>8} {:>8} {:>9}",
         "planner",
         "scenario",
         "goal",
         "reached",
         "coll",
-        "search med",
-        "search mean",
-        "len med",
-        "len mean",
+        "search ms med [IQR]",
+        "path m med [IQR]",
         "/opt med",
         "/opt max",
         "nodes@g"
     );
-    for s in &summary {
+    for s in summary {
         println!(
-            "{:<22} {:<10} {:>4} {:>5}/{:<2} {:>5} {:>10} ms {:>9} ms {:>8} m {:>8} m {:>8} {:>8} {:>9}",
+            "{:<22} {:<10} {:>4} {:>5}/{:<2} {:>5} {:>24} {:>24} {:>8} {:>8} {:>9}",
             s.planner,
             s.scenario,
             s.goal_index,
             s.reached,
             s.runs,
             s.collisions,
-            fmt_opt(s.search_time_median_s, 1e3, 2),
-            fmt_opt(s.search_time_mean_s, 1e3, 2),
-            fmt_opt(s.path_length_median_m, 1.0, 2),
-            fmt_opt(s.path_length_mean_m, 1.0, 2),
+            format!(
+                "{} [{}, {}]",
+                fmt_opt(s.search_time_median_s, 1e3, 2),
+                fmt_opt(s.search_time_q1_s, 1e3, 2),
+                fmt_opt(s.search_time_q3_s, 1e3, 2)
+            ),
+            format!(
+                "{} [{}, {}]",
+                fmt_opt(s.path_length_median_m, 1.0, 2),
+                fmt_opt(s.path_length_q1_m, 1.0, 2),
+                fmt_opt(s.path_length_q3_m, 1.0, 2)
+            ),
             fmt_opt(s.travelled_ratio_median, 1.0, 4),
             fmt_opt(s.travelled_ratio_max, 1.0, 4),
             fmt_opt(s.nodes_at_goal_median, 1.0, 0),
         );
     }
-    println!(
-        "wrote {} and {}",
-        args.out.join("runs.csv").display(),
-        args.out.join("summary.csv").display()
-    );
-    Ok(())
-}
-
-/// Measures wall nanoseconds per unit of planner work over a few built-in runs.
-pub fn calibrate(repeats: u32) -> Result<()> {
-    let preps: Vec<Prepared> = crate::maps::builtin_scenarios()
-        .into_iter()
-        .map(Prepared::new)
-        .collect();
-    let mut ratios = Vec::new();
-    for prep in &preps {
-        for name in ["Bi-AM-RRT*(D)", "AM-RRT*(E)", "RT-RRT*"] {
-            let cfg = Config::from_name(name).context("planner")?;
-            for seed in 1..=repeats as u64 {
-                let clock = WallClock::new();
-                let t0 = clock.now();
-                // Twenty calls: the search and the start of the drive (3 s of planning).
-                let protocol = Protocol {
-                    max_calls: 20,
-                    ..Protocol::default()
-                };
-                with_planner(prep, cfg, seed, |p| {
-                    drive(p, prep, &clock, &[0], &protocol, |_, _, _, _| {}).map(|_| ())
-                })?;
-                let ns = (clock.now() - t0) as f64;
-                ratios.push(ns / clock.work().max(1) as f64);
-            }
-        }
-    }
-    let m = median(&mut ratios).unwrap_or(0.0);
-    // `median` sorted the sample.
-    println!(
-        "wall ns per work unit: median {m:.2} over {} runs (min {:.2}, max {:.2}); the virtual clock uses {VIRTUAL_NS_PER_UNIT}",
-        ratios.len(),
-        ratios.first().copied().unwrap_or(0.0),
-        ratios.last().copied().unwrap_or(0.0)
-    );
-    Ok(())
-}
-
-/// One sample of the expansion-rate measurement.
-#[derive(Clone, Debug, Serialize)]
-pub struct GrowthRow {
-    pub planner: String,
-    pub mode: String,
-    pub scenario: String,
-    pub t_s: f64,
-    pub nodes: usize,
-    pub expansions: u32,
-    pub expansions_per_s: f64,
-    pub goal_cost_m: Option<f32>,
-}
-
-/// Measures how the expansion rate changes as the tree grows: each planner plans towards goal
-/// 1 without moving for `seconds` of wall time in calls of `call_ms`, in both rewiring modes
-/// (per-expansion visit budget, and the reference's full time budgets).
-pub fn growth(
-    scenarios: &[Scenario],
-    planners: &[Config],
-    seconds: f64,
-    call_ms: u64,
-    seed: u64,
-    out: &std::path::Path,
-) -> Result<()> {
-    std::fs::create_dir_all(out)?;
-    let mut rows = Vec::new();
-    for sc in scenarios {
-        let prep = Prepared::new(sc.clone());
-        for base in planners {
-            for (mode, rewire) in [
-                ("per-expansion", base.rewire_mode),
-                ("faithful", RewireMode::Faithful),
-            ] {
-                let mut cfg = *base;
-                cfg.rewire_mode = rewire;
-                cfg.t_exp = Duration::from_millis(call_ms);
-                with_planner(&prep, cfg, seed, |p| {
-                    p.set_goal(sc.goals[0])
-                        .map_err(|e| anyhow::anyhow!("{e}"))?;
-                    let clock = WallClock::new();
-                    while (clock.now() as f64) < seconds * 1e9 {
-                        let t0 = clock.now();
-                        let pr = p.grow(&clock);
-                        let dt = (clock.now() - t0) as f64 * 1e-9;
-                        rows.push(GrowthRow {
-                            planner: base.name().to_string(),
-                            mode: mode.into(),
-                            scenario: sc.name.clone(),
-                            t_s: clock.now() as f64 * 1e-9,
-                            nodes: pr.nodes,
-                            expansions: pr.expansions,
-                            expansions_per_s: pr.expansions as f64 / dt.max(1e-9),
-                            goal_cost_m: pr.goal_cost.filter(|c| !c.blocked).map(|c| c.length),
-                        });
-                    }
-                    Ok(())
-                })?;
-            }
-        }
-    }
-    let mut w = csv::Writer::from_path(out.join("growth.csv"))?;
-    for r in &rows {
-        w.serialize(r)?;
-    }
-    w.flush()?;
-    // Median rate per tree-size band.
-    let bands = [0usize, 250, 500, 1000, 2000, 4000, 8000, usize::MAX];
-    println!(
-        "{:<16} {:<10} {:<14} {:>14} {:>16}",
-        "planner", "scenario", "mode", "nodes", "expansions/s"
-    );
-    let mut keys: Vec<(String, String, String)> = Vec::new();
-    for r in &rows {
-        let k = (r.planner.clone(), r.scenario.clone(), r.mode.clone());
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    for (planner, scenario, mode) in keys {
-        for w in bands.windows(2) {
-            let mut rates: Vec<f64> = rows
-                .iter()
-                .filter(|r| r.planner == planner && r.scenario == scenario && r.mode == mode)
-                .filter(|r| r.nodes >= w[0] && r.nodes < w[1])
-                .map(|r| r.expansions_per_s)
-                .collect();
-            if let Some(m) = median(&mut rates) {
-                let band = if w[1] == usize::MAX {
-                    format!("{}+", w[0])
-                } else {
-                    format!("{}-{}", w[0], w[1])
-                };
-                println!("{planner:<16} {scenario:<10} {mode:<14} {band:>14} {m:>16.0}");
-            }
-        }
-    }
-    println!("wrote {}", out.join("growth.csv").display());
-    Ok(())
 }

@@ -22,9 +22,12 @@ pub mod draw;
 #[cfg(feature = "sim")]
 pub mod experiment;
 pub mod graph;
+#[cfg(feature = "sim")]
+pub mod growth;
 pub mod maps;
 pub mod metrics;
 pub mod optimum;
+pub mod results;
 #[cfg(feature = "sim")]
 pub mod run;
 #[cfg(feature = "sim")]

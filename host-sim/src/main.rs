@@ -112,9 +112,32 @@ enum Command {
         /// Planning time for the "cost after 100 ms without moving" column (ms; 0: skip).
         #[arg(long, default_value_t = 100)]
         anytime_ms: u64,
-        /// Output folder (runs.csv, summary.csv).
+        /// Run only slice K of N of the matrix (1-based, e.g. 3/8; runs i with i mod N = K - 1
+        /// in the order scenario, planner, seed). Join the slices' folders with `merge`.
+        #[arg(long)]
+        shard: Option<host_sim::results::Shard>,
+        /// Continue the experiment in --out: run only what it does not hold yet (its
+        /// experiment.json must have the same settings).
+        #[arg(long, conflicts_with = "overwrite")]
+        resume: bool,
+        /// Delete the results already in --out and start again.
+        #[arg(long)]
+        overwrite: bool,
+        /// Output folder (experiment.json, runs.csv appended as runs end; runs.json,
+        /// summary.csv and summary.json when complete).
         #[arg(long, default_value = "out/experiment")]
         out: PathBuf,
+    },
+    /// Join results folders of one experiment (its shards, or runs done on several machines)
+    /// into one: rows in canonical order, JSON and summaries. Their settings must be equal; a
+    /// run present twice is an error; missing runs are reported.
+    Merge {
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Folders to join.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
     },
     /// Benchmark the planners on every leg of each scenario, like OMPL's benchmark: a fresh
     /// planner per leg and seed, thread CPU time, time to the first solution and path cost
@@ -377,10 +400,21 @@ fn main() -> Result<()> {
             t_exp_ms,
             search_only,
             anytime_ms,
+            shard,
+            resume,
+            overwrite,
             out,
         } => {
             let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
             experiment::run(&ExperimentArgs {
+                shard,
+                existing: if resume {
+                    experiment::Existing::Resume
+                } else if overwrite {
+                    experiment::Existing::Overwrite
+                } else {
+                    experiment::Existing::Refuse
+                },
                 scenarios: scs,
                 planners: experiment::parse_planners(&planners)?,
                 repeats,
@@ -396,6 +430,23 @@ fn main() -> Result<()> {
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 out,
             })
+            .map(|_| ())
+        }
+        Command::Merge { out, inputs } => {
+            let m = host_sim::results::merge(&inputs, &out)?;
+            experiment::print_summary(&m.summary);
+            println!(
+                "merged {} folders: {} runs{} -> {}",
+                inputs.len(),
+                m.runs,
+                if m.missing > 0 {
+                    format!(", {} runs of the matrix missing", m.missing)
+                } else {
+                    String::new()
+                },
+                out.display()
+            );
+            Ok(())
         }
         Command::Bench {
             scenarios,
@@ -677,7 +728,7 @@ fn main() -> Result<()> {
             out,
         } => {
             let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
-            experiment::growth(
+            host_sim::growth::growth(
                 &scs,
                 &experiment::parse_planners(&planners)?,
                 seconds,
@@ -686,6 +737,8 @@ fn main() -> Result<()> {
                 &out,
             )
         }
-        Command::Calibrate { repeats } => experiment::calibrate(repeats).context("calibrating"),
+        Command::Calibrate { repeats } => {
+            host_sim::growth::calibrate(repeats).context("calibrating")
+        }
     }
 }

@@ -9,7 +9,8 @@ use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::{Circle, Point};
 use std::time::Instant;
 
-use crate::experiment::{Row, row};
+use crate::experiment::row;
+use crate::results::Row;
 
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::draw::{self, Canvas};

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use bi_am_rrt::builtin;
 use host_sim::clock::ClockKind;
 use host_sim::diffusion::{Options, TableOptions};
-use host_sim::experiment::{self, ExperimentArgs, Goals};
+use host_sim::experiment::{self, Existing, ExperimentArgs, Goals};
 use host_sim::graph::GridGraph;
 use host_sim::maps;
 
@@ -82,6 +82,8 @@ fn the_experiment_writes_one_row_per_run() {
         anytime_ms: 20,
         table: TableOptions::default(),
         t_exp: Some(std::time::Duration::from_millis(20)),
+        shard: None,
+        existing: Existing::Refuse,
         out: out.clone(),
     };
     experiment::run(&args).unwrap();
@@ -112,6 +114,10 @@ fn the_experiment_writes_one_row_per_run() {
     assert_eq!(&rows[0][idx("planner")], "Bi-AM-RRT*(D)");
     // The virtual clock makes the run repeatable: run again, same rows.
     let first = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let args = ExperimentArgs {
+        existing: Existing::Overwrite,
+        ..args
+    };
     experiment::run(&args).unwrap();
     let again = std::fs::read_to_string(out.join("runs.csv")).unwrap();
     let strip = |s: &str| {
@@ -135,6 +141,101 @@ fn the_experiment_writes_one_row_per_run() {
             );
         }
     }
+}
+
+/// The rows of a results folder without the wall-time column (the only one that is not
+/// repeatable with the virtual clock).
+fn rows_without_wall_time(dir: &Path) -> Vec<String> {
+    std::fs::read_to_string(dir.join("runs.csv"))
+        .unwrap()
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+        .collect()
+}
+
+/// Issue 9: an interrupted matrix keeps its rows and `--resume` does the rest; `--shard K/N`
+/// slices and `merge` joins them; every way gives the rows of one uninterrupted run.
+#[test]
+fn shards_merge_and_resume_give_the_rows_of_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_builtin_file(dir.path());
+    let args = |out: &Path, shard: Option<&str>, existing| ExperimentArgs {
+        scenarios: maps::load_scenarios(&file, Some(&["open".into(), "maze".into()])).unwrap(),
+        planners: experiment::parse_planners("Bi-AM-RRT*(E),RT-RRT*").unwrap(),
+        repeats: 2,
+        clock: ClockKind::Virtual,
+        goals: Goals::First,
+        seed: 3,
+        jobs: Some(2),
+        faithful: false,
+        keep_reverse_branches: false,
+        search_only: true,
+        anytime_ms: 0,
+        table: TableOptions::default(),
+        t_exp: Some(std::time::Duration::from_millis(5)),
+        shard: shard.map(|s| s.parse().unwrap()),
+        existing,
+        out: out.to_path_buf(),
+    };
+    let whole = dir.path().join("whole");
+    let o = experiment::run(&args(&whole, None, Existing::Refuse)).unwrap();
+    assert_eq!((o.runs, o.ran), (8, 8));
+    let reference = rows_without_wall_time(&whole);
+    assert_eq!(reference.len(), 9, "a header and 8 rows");
+    for f in [
+        "experiment.json",
+        "runs.json",
+        "summary.csv",
+        "summary.json",
+    ] {
+        assert!(whole.join(f).exists(), "{f}");
+    }
+    // A second run into the same folder is refused without --resume or --overwrite.
+    let e = experiment::run(&args(&whole, None, Existing::Refuse)).unwrap_err();
+    assert!(format!("{e:#}").contains("--resume"), "{e:#}");
+
+    // Three shards (3, 3 and 2 runs), merged.
+    let shards: Vec<PathBuf> = (1..=3).map(|k| dir.path().join(format!("s{k}"))).collect();
+    for (k, d) in shards.iter().enumerate() {
+        let o = experiment::run(&args(d, Some(&format!("{}/3", k + 1)), Existing::Refuse)).unwrap();
+        assert_eq!(o.runs, if k < 2 { 3 } else { 2 });
+    }
+    let merged = dir.path().join("merged");
+    let m = host_sim::results::merge(&shards, &merged).unwrap();
+    assert_eq!((m.runs, m.missing), (8, 0));
+    assert_eq!(rows_without_wall_time(&merged), reference);
+    // Two shards only: merged, with the third's runs reported missing.
+    let m = host_sim::results::merge(&shards[..2], &dir.path().join("partial")).unwrap();
+    assert_eq!((m.runs, m.missing), (6, 2));
+    // A run in two inputs, or folders run with other settings, are refused.
+    let e = host_sim::results::merge(&[whole.clone(), shards[0].clone()], &merged).unwrap_err();
+    assert!(format!("{e:#}").contains("earlier input"), "{e:#}");
+    let other = dir.path().join("other");
+    let mut a = args(&other, Some("1/3"), Existing::Refuse);
+    a.seed = 4;
+    experiment::run(&a).unwrap();
+    let e = host_sim::results::merge(&[shards[1].clone(), other], &merged).unwrap_err();
+    assert!(format!("{e:#}").contains("seed"), "{e:#}");
+
+    // An interruption: the last three runs are gone and the fourth-last is cut mid-line.
+    let cut = dir.path().join("cut");
+    std::fs::create_dir_all(&cut).unwrap();
+    std::fs::copy(whole.join("experiment.json"), cut.join("experiment.json")).unwrap();
+    let text = std::fs::read_to_string(whole.join("runs.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut partial = lines[..lines.len() - 4].join("\n");
+    partial.push('\n');
+    partial.push_str(&lines[lines.len() - 4][..20]);
+    std::fs::write(cut.join("runs.csv"), partial).unwrap();
+    let e = experiment::run(&args(&cut, Some("1/2"), Existing::Resume)).unwrap_err();
+    assert!(format!("{e:#}").contains("shard"), "{e:#}");
+    let o = experiment::run(&args(&cut, None, Existing::Resume)).unwrap();
+    assert_eq!((o.runs, o.ran), (8, 4), "the four runs the folder lacked");
+    assert_eq!(rows_without_wall_time(&cut), reference);
+    // Nothing left to do: resuming again runs nothing and changes nothing.
+    let o = experiment::run(&args(&cut, None, Existing::Resume)).unwrap();
+    assert_eq!(o.ran, 0);
+    assert_eq!(rows_without_wall_time(&cut), reference);
 }
 
 fn shared_maps() -> Option<PathBuf> {
