@@ -27,6 +27,8 @@ pub mod growth;
 pub mod maps;
 pub mod metrics;
 pub mod optimum;
+#[cfg(feature = "sim")]
+pub mod report;
 pub mod results;
 #[cfg(feature = "sim")]
 pub mod run;

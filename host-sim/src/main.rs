@@ -128,6 +128,18 @@ enum Command {
         #[arg(long, default_value = "out/experiment")]
         out: PathBuf,
     },
+    /// Turn an experiment's results folder into charts (SVG and PNG) and a Markdown report in
+    /// the shape of the paper's Section 5: Fig. 6 (original vs modified for each scheme), box
+    /// plots per planner, nodes at goal, Table 3 (map processing), the paper's claims.
+    Report {
+        /// The results folder (experiment.json and runs.csv).
+        #[arg(long)]
+        results: PathBuf,
+        /// The Markdown file to write; the charts go to a folder beside it of the same name
+        /// (default: RESULTS/report.md and RESULTS/report/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Join results folders of one experiment (its shards, or runs done on several machines)
     /// into one: rows in canonical order, JSON and summaries. Their settings must be equal; a
     /// run present twice is an error; missing runs are reported.
@@ -431,6 +443,22 @@ fn main() -> Result<()> {
                 out,
             })
             .map(|_| ())
+        }
+        Command::Report { results, out } => {
+            let out = out.unwrap_or_else(|| results.join("report.md"));
+            let command = format!(
+                "host-sim report --results {} --out {}",
+                results.display(),
+                out.display()
+            );
+            let r = host_sim::report::report(&results, &out, &command)?;
+            println!(
+                "wrote {} and {} charts (SVG and PNG) in {}",
+                r.markdown.display(),
+                r.charts.len(),
+                out.with_extension("").display()
+            );
+            Ok(())
         }
         Command::Merge { out, inputs } => {
             let m = host_sim::results::merge(&inputs, &out)?;

@@ -161,7 +161,7 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     let file = write_builtin_file(dir.path());
     let args = |out: &Path, shard: Option<&str>, existing| ExperimentArgs {
         scenarios: maps::load_scenarios(&file, Some(&["open".into(), "maze".into()])).unwrap(),
-        planners: experiment::parse_planners("Bi-AM-RRT*(E),RT-RRT*").unwrap(),
+        planners: experiment::parse_planners("AM-RRT*(E),Bi-AM-RRT*(E)").unwrap(),
         repeats: 2,
         clock: ClockKind::Virtual,
         goals: Goals::First,
@@ -236,6 +236,35 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     let o = experiment::run(&args(&cut, None, Existing::Resume)).unwrap();
     assert_eq!(o.ran, 0);
     assert_eq!(rows_without_wall_time(&cut), reference);
+
+    // The report of the merged folder: Fig. 6 (c) for the Bi- pair, box plots per map, the
+    // tables, each chart as SVG and PNG.
+    let md = dir.path().join("doc").join("results.md");
+    let r = host_sim::report::report(&merged, &md, "test").unwrap();
+    let names: Vec<String> = r
+        .charts
+        .iter()
+        .map(|c| c.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["fig6c", "box-open", "box-maze"]);
+    for c in &r.charts {
+        for ext in ["svg", "png"] {
+            let f = c.with_extension(ext);
+            assert!(
+                std::fs::metadata(&f).unwrap().len() > 1000,
+                "{}",
+                f.display()
+            );
+        }
+    }
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert!(text.contains("8 of 8 runs"), "{text}");
+    assert!(text.contains("![fig6c](results/fig6c.svg)"), "{text}");
+    assert!(text.contains("| (c) both (Bi-) | maze |"), "{text}");
+    assert!(
+        text.contains("| Bi-AM-RRT*(E) | 0/2 |"),
+        "search-only runs do not arrive: {text}"
+    );
 }
 
 fn shared_maps() -> Option<PathBuf> {

@@ -1,0 +1,785 @@
+//! The `report` command: a results folder (`results`) turned into charts (`plotters`, SVG and
+//! PNG) and a Markdown document, in the shape of the paper's Section 5:
+//!
+//! - Fig. 6 (a)-(c): for each scheme (`-1` bidirectional search, `-2` the new rewiring, `Bi-`
+//!   both), the mean search time and mean path length of the five base planners, original
+//!   against modified, per map, with the change in percent;
+//! - box plots per planner and map of the search time and of travelled / optimal;
+//! - the nodes in the tree when the goal joined (the paper's Section 6 argument);
+//! - Table 3, the map-processing times, from the manifest;
+//! - a headline table per map (every planner: search time median and quartiles, means, path,
+//!   travelled / optimal, nodes at goal, change against its original planner), and the
+//!   paper's own claims next to the measured changes.
+//!
+//! Only goal 1 of each run enters (the paper's experiment is start to goal 1). A folder that is
+//! not complete is reported as it is, with the count of runs it holds.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use anyhow::{Context, Result, anyhow};
+use bi_am_rrt::Config;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::results::{Manifest, Row, Spread, read_rows};
+use crate::stats::quantile;
+
+/// Registers the embedded DejaVu Sans as plotters' `sans-serif` (no system fonts needed).
+fn fonts() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Bold, dejavu::sans::bold());
+    });
+}
+
+/// Something drawable on any plotters backend.
+trait Chart {
+    fn size(&self) -> (u32, u32);
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>;
+}
+
+fn ok<T, E: std::fmt::Debug>(r: std::result::Result<T, E>) -> Result<T> {
+    r.map_err(|e| anyhow!("drawing: {e:?}"))
+}
+
+/// Writes `stem.svg` and `stem.png`.
+fn render(chart: &impl Chart, stem: &Path) -> Result<()> {
+    fonts();
+    let (w, h) = chart.size();
+    let svg = stem.with_extension("svg");
+    {
+        let root = SVGBackend::new(&svg, (w, h)).into_drawing_area();
+        ok(root.fill(&WHITE))?;
+        chart.draw(&root)?;
+        ok(root.present())?;
+    }
+    let mut buf = vec![0u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        ok(root.fill(&WHITE))?;
+        chart.draw(&root)?;
+        ok(root.present())?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).context("image buffer")?;
+    let png = stem.with_extension("png");
+    img.save(&png)
+        .with_context(|| format!("{}", png.display()))?;
+    Ok(())
+}
+
+/// A number for an axis or a table: three significant digits, no exponent.
+fn num(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if a >= 100.0 {
+        format!("{v:.0}")
+    } else if a >= 10.0 {
+        format!("{v:.1}")
+    } else if a >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        let digits = (2.0 - a.log10().floor()) as usize;
+        format!("{v:.digits$}")
+    }
+}
+
+/// Groups of bars, one panel per (row, column).
+struct Bars {
+    title: String,
+    cols: usize,
+    panels: Vec<BarPanel>,
+}
+
+struct BarPanel {
+    title: String,
+    y_label: String,
+    log: bool,
+    groups: Vec<String>,
+    /// Colour of each series (named in the chart's title).
+    series: Vec<RGBColor>,
+    /// `values[group][series]`.
+    values: Vec<Vec<Option<f64>>>,
+    /// Text above each group (e.g. the change in percent).
+    notes: Vec<Option<String>>,
+}
+
+impl Chart for Bars {
+    fn size(&self) -> (u32, u32) {
+        let rows = self.panels.len().div_ceil(self.cols) as u32;
+        (420 * self.cols as u32, 60 + 320 * rows)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()> {
+        let area = ok(area.titled(&self.title, ("sans-serif", 22)))?;
+        let rows = self.panels.len().div_ceil(self.cols);
+        for (p, a) in self.panels.iter().zip(area.split_evenly((rows, self.cols))) {
+            p.draw(&a)?;
+        }
+        Ok(())
+    }
+}
+
+impl BarPanel {
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()> {
+        let all: Vec<f64> = self
+            .values
+            .iter()
+            .flatten()
+            .flatten()
+            .copied()
+            .filter(|v| v.is_finite() && (!self.log || *v > 0.0))
+            .collect();
+        let Some(max) = all.iter().copied().reduce(f64::max) else {
+            return Ok(());
+        };
+        let min = all.iter().copied().reduce(f64::min).unwrap_or(max);
+        let tf = |v: f64| if self.log { v.log10() } else { v };
+        let (lo, hi) = if self.log {
+            (tf(min).floor(), tf(max).ceil() + 0.35)
+        } else {
+            (0.0, max * 1.2)
+        };
+        let n = self.groups.len();
+        let mut chart = ok(ChartBuilder::on(area)
+            .caption(&self.title, ("sans-serif", 15))
+            .margin(6)
+            .x_label_area_size(42)
+            .y_label_area_size(58)
+            .build_cartesian_2d(-0.5f64..n as f64 - 0.5, lo..hi))?;
+        let groups = &self.groups;
+        let log = self.log;
+        ok(chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .light_line_style(WHITE)
+            .x_labels(n)
+            .x_label_formatter(&|x| {
+                // Groups sit at the integers; other ticks get no label.
+                if (x - x.round()).abs() < 1e-6 && *x >= 0.0 {
+                    groups.get(x.round() as usize).cloned().unwrap_or_default()
+                } else {
+                    String::new()
+                }
+            })
+            .x_label_style(("sans-serif", 10))
+            .y_labels(8)
+            .y_label_formatter(&|y| if log { num(10f64.powf(*y)) } else { num(*y) })
+            .y_desc(self.y_label.as_str())
+            .draw())?;
+        let width = 0.8 / self.series.len().max(1) as f64;
+        for (s, colour) in self.series.iter().enumerate() {
+            let colour = *colour;
+            let bars = self.values.iter().enumerate().filter_map(|(g, v)| {
+                let v = v.get(s).copied().flatten()?;
+                let x0 = g as f64 - 0.4 + s as f64 * width;
+                Some(Rectangle::new(
+                    [(x0, lo), (x0 + width * 0.95, tf(v).max(lo))],
+                    colour.filled(),
+                ))
+            });
+            ok(chart.draw_series(bars))?;
+        }
+        for (g, note) in self.notes.iter().enumerate() {
+            let (Some(note), Some(top)) = (
+                note,
+                self.values[g]
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|v| !self.log || *v > 0.0)
+                    .map(tf)
+                    .reduce(f64::max),
+            ) else {
+                continue;
+            };
+            let style = TextStyle::from(("sans-serif", 11).into_font()).pos(
+                plotters::style::text_anchor::Pos::new(
+                    plotters::style::text_anchor::HPos::Center,
+                    plotters::style::text_anchor::VPos::Bottom,
+                ),
+            );
+            ok(chart.draw_series(std::iter::once(Text::new(
+                note.clone(),
+                (g as f64, top + (hi - lo) * 0.01),
+                style,
+            ))))?;
+        }
+        Ok(())
+    }
+}
+
+/// Horizontal box plots (median, quartiles, Tukey's whiskers, outliers as dots), one panel
+/// per column.
+struct Boxes {
+    title: String,
+    panels: Vec<BoxPanel>,
+}
+
+struct BoxPanel {
+    title: String,
+    x_label: String,
+    log: bool,
+    names: Vec<String>,
+    samples: Vec<Vec<f64>>,
+}
+
+impl Chart for Boxes {
+    fn size(&self) -> (u32, u32) {
+        let n = self.panels.first().map_or(1, |p| p.names.len()) as u32;
+        (520 * self.panels.len() as u32 + 60, 90 + 24 * n + 60)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()> {
+        let area = ok(area.titled(&self.title, ("sans-serif", 20)))?;
+        for (p, a) in self
+            .panels
+            .iter()
+            .zip(area.split_evenly((1, self.panels.len())))
+        {
+            p.draw(&a)?;
+        }
+        Ok(())
+    }
+}
+
+impl BoxPanel {
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()> {
+        let tf = |v: f64| if self.log { v.log10() } else { v };
+        let data: Vec<Vec<f64>> = self
+            .samples
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .copied()
+                    .filter(|v| v.is_finite() && (!self.log || *v > 0.0))
+                    .map(tf)
+                    .collect()
+            })
+            .collect();
+        let all: Vec<f64> = data.iter().flatten().copied().collect();
+        let (Some(min), Some(max)) = (
+            all.iter().copied().reduce(f64::min),
+            all.iter().copied().reduce(f64::max),
+        ) else {
+            return Ok(());
+        };
+        let pad = ((max - min) * 0.05).max(if self.log { 0.1 } else { 0.005 });
+        let (lo, hi) = (min - pad, max + pad);
+        let n = self.names.len();
+        // Planner `i` sits at y = n - 1 - i (the first on top).
+        let mut chart = ok(ChartBuilder::on(area)
+            .caption(&self.title, ("sans-serif", 15))
+            .margin(8)
+            .x_label_area_size(40)
+            .y_label_area_size(130)
+            .build_cartesian_2d(lo..hi, -0.5f64..n as f64 - 0.5))?;
+        let names = &self.names;
+        let log = self.log;
+        ok(chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .light_line_style(WHITE)
+            .y_labels(n)
+            .y_label_formatter(&|y| {
+                let k = y.round();
+                if (y - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < n {
+                    names[n - 1 - k as usize].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .y_label_style(("sans-serif", 11))
+            .x_labels(8)
+            .x_label_formatter(&|x| if log { num(10f64.powf(*x)) } else { num(*x) })
+            .x_desc(self.x_label.as_str())
+            .draw())?;
+        let colour = RGBColor(40, 80, 160);
+        for (i, d) in data.iter().enumerate() {
+            let mut v = d.clone();
+            let (Some(q1), Some(q2), Some(q3)) = (
+                quantile(&mut v, 0.25),
+                quantile(&mut v, 0.5),
+                quantile(&mut v, 0.75),
+            ) else {
+                continue;
+            };
+            // Tukey's whiskers: the furthest samples within 1.5 IQR of the box.
+            let iqr = q3 - q1;
+            let inside = |x: &&f64| **x >= q1 - 1.5 * iqr && **x <= q3 + 1.5 * iqr;
+            let wl = v.iter().filter(inside).copied().fold(q1, f64::min);
+            let wh = v.iter().filter(inside).copied().fold(q3, f64::max);
+            let y = (n - 1 - i) as f64;
+            let h = 0.28;
+            let style = ShapeStyle::from(colour).stroke_width(1);
+            let mut shapes: Vec<DynElement<'static, DB, (f64, f64)>> = vec![
+                Rectangle::new([(q1, y - h), (q3, y + h)], colour.mix(0.15).filled()).into_dyn(),
+                Rectangle::new([(q1, y - h), (q3, y + h)], style).into_dyn(),
+                PathElement::new(vec![(q2, y - h), (q2, y + h)], style.stroke_width(2)).into_dyn(),
+                PathElement::new(vec![(wl, y), (q1, y)], style).into_dyn(),
+                PathElement::new(vec![(q3, y), (wh, y)], style).into_dyn(),
+                PathElement::new(vec![(wl, y - h / 2.0), (wl, y + h / 2.0)], style).into_dyn(),
+                PathElement::new(vec![(wh, y - h / 2.0), (wh, y + h / 2.0)], style).into_dyn(),
+            ];
+            for x in v.iter().filter(|x| !inside(x)) {
+                shapes.push(Circle::new((*x, y), 2, style).into_dyn());
+            }
+            ok(chart.draw_series(shapes))?;
+        }
+        Ok(())
+    }
+}
+
+/// The paper's scheme of a planner name: `Original`, `-1`, `-2` or `Bi-`, and the name of
+/// its original planner.
+fn scheme(name: &str) -> Option<(Scheme, String)> {
+    let base = name.strip_suffix(" tuned").unwrap_or(name);
+    let c = Config::from_name(base)?;
+    let s = match (c.bidirectional, c.new_rewiring) {
+        (false, false) => Scheme::Original,
+        (true, false) => Scheme::Bidirectional,
+        (false, true) => Scheme::Rewiring,
+        (true, true) => Scheme::Both,
+    };
+    let orig = c.with_bidirectional(false).with_new_rewiring(false);
+    let mut o = orig.name().to_string();
+    if base.len() != name.len() {
+        o.push_str(" tuned");
+    }
+    Some((s, o))
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scheme {
+    Original,
+    Bidirectional,
+    Rewiring,
+    Both,
+}
+
+impl Scheme {
+    fn label(self) -> &'static str {
+        match self {
+            Scheme::Original => "original",
+            Scheme::Bidirectional => "(a) bidirectional search (-1)",
+            Scheme::Rewiring => "(b) new rewiring (-2)",
+            Scheme::Both => "(c) both (Bi-)",
+        }
+    }
+}
+
+/// What the paper states for each scheme (Section 5.2, Table 3), for the comparison table.
+const PAPER_CLAIMS: &[(&str, &str)] = &[
+    (
+        "(a) bidirectional search (-1)",
+        "search time -69 % (bug_trap), -40.1 % (maze), -41.7 % (office); path length +0.8 %; \
+         AM-RRT*(E)-1 search time -75.6 % on bug_trap",
+    ),
+    (
+        "(b) new rewiring (-2)",
+        "path length -2.2 % on average; AM-RRT*(D)-2 on office: path -3 %, search time -5.6 %",
+    ),
+    (
+        "(c) both (Bi-)",
+        "Bi-AM-RRT*(D): search time -24.6 / -45.2 / -44.9 %, path -1.4 / -0.7 / -2.8 % \
+         (bug_trap / maze / office); Bi-AM-RRT*(E): search time -76.7 %, path +2.6 % on average; \
+         Bi-RT-RRT* and Bi-AM-RRT*(E) paths longer on bug_trap",
+    ),
+    (
+        "nodes at goal",
+        "bug_trap: RT-RRT* 445, AM-RRT*(E) 1,062, AM-RRT*(D) 76 on average",
+    ),
+    (
+        "map processing (Table 3)",
+        "diffusion 1.5 / 1.5 / 5.6 s, geodesic 49 / 49 / 232 s (bug_trap / maze / office)",
+    ),
+];
+
+/// Per planner and map: the goal-1 statistics the report uses.
+struct Cell {
+    runs: usize,
+    reached: usize,
+    collisions: u32,
+    search_s: Vec<f64>,
+    path_m: Vec<f64>,
+    ratio: Vec<f64>,
+    nodes: Vec<f64>,
+}
+
+impl Cell {
+    fn of(rows: &[&Row]) -> Self {
+        let reached: Vec<&&Row> = rows.iter().filter(|r| r.reached).collect();
+        Self {
+            runs: rows.len(),
+            reached: reached.len(),
+            collisions: rows.iter().map(|r| r.collisions).sum(),
+            search_s: rows.iter().filter_map(|r| r.search_time_s).collect(),
+            path_m: reached.iter().map(|r| f64::from(r.path_length_m)).collect(),
+            ratio: reached
+                .iter()
+                .filter_map(|r| r.travelled_ratio.map(f64::from))
+                .collect(),
+            nodes: rows
+                .iter()
+                .filter_map(|r| r.nodes_at_goal.map(|n| n as f64))
+                .collect(),
+        }
+    }
+
+    fn search_mean(&self) -> Option<f64> {
+        Spread::of(self.search_s.clone()).mean
+    }
+
+    fn path_mean(&self) -> Option<f64> {
+        Spread::of(self.path_m.clone()).mean
+    }
+}
+
+fn change(orig: Option<f64>, new: Option<f64>) -> Option<f64> {
+    match (orig, new) {
+        (Some(o), Some(n)) if o > 0.0 => Some(100.0 * (n - o) / o),
+        _ => None,
+    }
+}
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |p| format!("{p:+.1} %"))
+}
+
+fn opt(v: Option<f64>, scale: f64) -> String {
+    v.map_or_else(|| "-".into(), |x| num(x * scale))
+}
+
+/// What `report` wrote.
+#[derive(Debug)]
+pub struct Report {
+    /// The Markdown file.
+    pub markdown: PathBuf,
+    /// Charts written (stems; each as .svg and .png).
+    pub charts: Vec<PathBuf>,
+}
+
+/// Writes the report of the results folder `results` to `out` (a `.md` file); the charts go
+/// to a folder beside it named after it (`docs/results.md` -> `docs/results/`).
+pub fn report(results: &Path, out: &Path, command: &str) -> Result<Report> {
+    let manifest = Manifest::read(results)?
+        .with_context(|| format!("{} has no experiment.json", results.display()))?;
+    let rows = read_rows(results, false)?;
+    let goal1: Vec<&Row> = rows.iter().filter(|r| r.goal_index == 1).collect();
+    let settings = &manifest.settings;
+    let maps: Vec<String> = settings
+        .scenarios
+        .iter()
+        .map(|s| s.name.clone())
+        .filter(|m| goal1.iter().any(|r| &r.scenario == m))
+        .collect();
+    let planners: Vec<String> = settings
+        .planners
+        .iter()
+        .filter(|p| goal1.iter().any(|r| &r.planner == *p))
+        .cloned()
+        .collect();
+    let cell = |p: &str, m: &str| {
+        let rs: Vec<&Row> = goal1
+            .iter()
+            .filter(|r| r.planner == p && r.scenario == m)
+            .copied()
+            .collect();
+        Cell::of(&rs)
+    };
+    let stem = out.with_extension("");
+    let chart_dir = stem.clone();
+    std::fs::create_dir_all(&chart_dir).with_context(|| format!("{}", chart_dir.display()))?;
+    let rel = chart_dir
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let mut charts = Vec::new();
+    let mut md = String::new();
+    let done = crate::results::done_runs(&rows).len();
+    let wanted = manifest.runs().len();
+    let _ = writeln!(md, "# Results: the paper's experiment, measured\n");
+    let _ = writeln!(
+        md,
+        "Generated by `{command}` from `{}` ({done} of {wanted} runs{}; {}). Regenerate with the \
+         same command; the experiment itself is in the folder's `experiment.json`.\n",
+        results.display(),
+        if done < wanted {
+            ", **incomplete**"
+        } else {
+            ""
+        },
+        manifest.tool
+    );
+    let _ = writeln!(
+        md,
+        "Settings: {} repeats (seeds {}-{}), clock `{:?}`, goals `{:?}`, `t_exp` {}, rewiring {}, \
+         anytime column {} ms, diffusion table {}. Statistics are over the runs' goal 1 (start \
+         to goal 1, as the paper): medians with the interquartile range, and means where the \
+         paper reports means (Fig. 6).\n",
+        settings.repeats,
+        settings.seed,
+        settings.seed + u64::from(settings.repeats.max(1)) - 1,
+        settings.clock,
+        settings.goals,
+        settings
+            .t_exp_ms
+            .map_or("150 ms (the paper's)".into(), |t| format!("{t} ms")),
+        if settings.faithful {
+            "the reference's time budgets"
+        } else {
+            "24 visits per phase and expansion"
+        },
+        settings.anytime_ms,
+        settings.table
+    );
+
+    // Fig. 6: one chart per scheme.
+    let mut scheme_changes: Vec<(Scheme, String, Option<f64>, Option<f64>)> = Vec::new();
+    for sch in [Scheme::Bidirectional, Scheme::Rewiring, Scheme::Both] {
+        let pairs: Vec<(String, String)> = planners
+            .iter()
+            .filter_map(|p| {
+                let (s, o) = scheme(p)?;
+                (s == sch && planners.contains(&o)).then(|| (o, p.clone()))
+            })
+            .collect();
+        if pairs.is_empty() {
+            continue;
+        }
+        let mut panels = Vec::new();
+        for (what, log) in [
+            ("search time, mean (ms)", true),
+            ("path length, mean (m)", false),
+        ] {
+            for m in &maps {
+                let mut values = Vec::new();
+                let mut notes = Vec::new();
+                for (o, p) in &pairs {
+                    let (co, cp) = (cell(o, m), cell(p, m));
+                    let (vo, vp) = if log {
+                        (
+                            co.search_mean().map(|s| s * 1e3),
+                            cp.search_mean().map(|s| s * 1e3),
+                        )
+                    } else {
+                        (co.path_mean(), cp.path_mean())
+                    };
+                    notes.push(change(vo, vp).map(|c| format!("{c:+.1}%")));
+                    values.push(vec![vo, vp]);
+                }
+                panels.push(BarPanel {
+                    title: format!("{m}: {what}"),
+                    y_label: if log { "ms (log)".into() } else { "m".into() },
+                    log,
+                    groups: pairs.iter().map(|(o, _)| o.clone()).collect(),
+                    series: vec![RGBColor(150, 150, 150), RGBColor(40, 90, 180)],
+                    values,
+                    notes,
+                });
+            }
+        }
+        panels.retain(|p| p.values.iter().flatten().any(Option::is_some));
+        let file = chart_dir.join(match sch {
+            Scheme::Bidirectional => "fig6a",
+            Scheme::Rewiring => "fig6b",
+            _ => "fig6c",
+        });
+        render(
+            &Bars {
+                title: format!("Fig. 6 {}: original (grey) vs modified (blue)", sch.label()),
+                cols: maps.len().max(1),
+                panels,
+            },
+            &file,
+        )?;
+        charts.push(file);
+        for m in &maps {
+            let mut ds = Vec::new();
+            let mut dp = Vec::new();
+            for (o, p) in &pairs {
+                let (co, cp) = (cell(o, m), cell(p, m));
+                ds.extend(change(co.search_mean(), cp.search_mean()));
+                dp.extend(change(co.path_mean(), cp.path_mean()));
+            }
+            scheme_changes.push((
+                sch,
+                m.clone(),
+                crate::stats::mean(&ds),
+                crate::stats::mean(&dp),
+            ));
+        }
+    }
+
+    // Box plots and nodes at goal.
+    for m in &maps {
+        let cells: Vec<Cell> = planners.iter().map(|p| cell(p, m)).collect();
+        let file = chart_dir.join(format!("box-{m}"));
+        let mut boxes = Boxes {
+            title: format!(
+                "{m}: every planner, goal 1 ({} runs each)",
+                settings.repeats
+            ),
+            panels: vec![
+                BoxPanel {
+                    title: "search time (ms, log scale)".into(),
+                    x_label: "ms".into(),
+                    log: true,
+                    names: planners.clone(),
+                    samples: cells
+                        .iter()
+                        .map(|c| c.search_s.iter().map(|s| s * 1e3).collect())
+                        .collect(),
+                },
+                BoxPanel {
+                    title: "travelled / exact optimum".into(),
+                    x_label: "ratio".into(),
+                    log: false,
+                    names: planners.clone(),
+                    samples: cells.iter().map(|c| c.ratio.clone()).collect(),
+                },
+                BoxPanel {
+                    title: "nodes in the tree when the goal joined (log)".into(),
+                    x_label: "nodes".into(),
+                    log: true,
+                    names: planners.clone(),
+                    samples: cells.iter().map(|c| c.nodes.clone()).collect(),
+                },
+            ],
+        };
+        boxes
+            .panels
+            .retain(|p| p.samples.iter().any(|s| !s.is_empty()));
+        render(&boxes, &file)?;
+        charts.push(file);
+    }
+
+    // Markdown: the paper's claims next to the measured scheme changes.
+    let _ = writeln!(md, "## Fig. 6: what each scheme changes\n");
+    let _ = writeln!(
+        md,
+        "Change of the modified planner against its original (mean search time, mean path \
+         length), averaged over the base planners the folder holds, per map. The paper's figures are from \
+         its text (Section 5.2).\n"
+    );
+    let _ = writeln!(
+        md,
+        "| scheme | map | search time | path length |\n|---|---|---:|---:|"
+    );
+    for (sch, m, ds, dp) in &scheme_changes {
+        let _ = writeln!(
+            md,
+            "| {} | {m} | {} | {} |",
+            sch.label(),
+            pct(*ds),
+            pct(*dp)
+        );
+    }
+    let _ = writeln!(md, "\n| the paper says | |\n|---|---|");
+    for (k, v) in PAPER_CLAIMS {
+        let _ = writeln!(md, "| {k} | {v} |");
+    }
+    for f in ["fig6a", "fig6b", "fig6c"] {
+        if charts.iter().any(|c| c.ends_with(f)) {
+            let _ = writeln!(md, "\n![{f}]({rel}/{f}.svg)");
+        }
+    }
+
+    // Headline tables.
+    let _ = writeln!(md, "\n## Every planner, per map (goal 1)\n");
+    let _ = writeln!(
+        md,
+        "Search time: goal set until the goal joins the forward tree, on the run's clock. Path: \
+         travelled by the agent. Change: mean against the planner's original (Table 1 row 1).\n"
+    );
+    for m in &maps {
+        let _ = writeln!(md, "### {m}\n");
+        let _ = writeln!(
+            md,
+            "| planner | reached | search ms, median [IQR] | search ms, mean | path m, mean | \
+             travelled / optimal, median [IQR] | nodes at goal, median | change: search | \
+             change: path |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+        );
+        for p in &planners {
+            let c = cell(p, m);
+            let s = Spread::of(c.search_s.clone());
+            let r = Spread::of(c.ratio.clone());
+            let orig = scheme(p)
+                .filter(|(s, _)| *s != Scheme::Original)
+                .map(|(_, o)| cell(&o, m));
+            let _ = writeln!(
+                md,
+                "| {p} | {}/{}{} | {} [{}, {}] | {} | {} | {} [{}, {}] | {} | {} | {} |",
+                c.reached,
+                c.runs,
+                if c.collisions > 0 {
+                    format!(" ({} collisions)", c.collisions)
+                } else {
+                    String::new()
+                },
+                opt(s.median, 1e3),
+                opt(s.q1, 1e3),
+                opt(s.q3, 1e3),
+                opt(s.mean, 1e3),
+                opt(c.path_mean(), 1.0),
+                r.median.map_or("-".into(), |v| format!("{v:.3}")),
+                r.q1.map_or("-".into(), |v| format!("{v:.3}")),
+                r.q3.map_or("-".into(), |v| format!("{v:.3}")),
+                opt(Spread::of(c.nodes.clone()).median, 1.0),
+                pct(orig
+                    .as_ref()
+                    .and_then(|o| change(o.search_mean(), c.search_mean()))),
+                pct(orig
+                    .as_ref()
+                    .and_then(|o| change(o.path_mean(), c.path_mean()))),
+            );
+        }
+        let _ = writeln!(md, "\n![box plots of {m}]({rel}/box-{m}.svg)\n");
+    }
+
+    // Table 3.
+    let _ = writeln!(md, "## Table 3: map processing\n");
+    let _ = writeln!(
+        md,
+        "Measured when the folder was run (one core each). The geodesic metric here computes a \
+         distance field per target on demand (Dijkstra on the grid graph) and caches it; the \
+         paper's figure is for all pairs up front.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| map | cells | diffusion bake (s) | table bytes | grid graph (s) | one geodesic field \
+         (ms) | exact optima (ms) |\n|---|---:|---:|---:|---:|---:|---:|"
+    );
+    for t in &manifest.maps {
+        let _ = writeln!(
+            md,
+            "| {} | {} x {} of {} m | {} | {} | {} | {} | {} |",
+            t.scenario,
+            t.cols,
+            t.rows,
+            t.cell_m,
+            opt(t.diffusion_bake_s, 1.0),
+            t.table_bytes.map_or("-".into(), |b| b.to_string()),
+            num(t.graph_s),
+            num(t.geodesic_field_s * 1e3),
+            num(t.optima_s * 1e3)
+        );
+    }
+    if let Some(dir) = out.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(out, md).with_context(|| format!("{}", out.display()))?;
+    Ok(Report {
+        markdown: out.to_path_buf(),
+        charts,
+    })
+}
