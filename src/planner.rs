@@ -175,6 +175,9 @@ pub struct Stats {
     pub reverse_expansions: u64,
     /// Whether the goal joined through a meet of the two trees.
     pub met: bool,
+    /// The joining segment of that meet: the forward node and the reverse node it grafted
+    /// (the paper's Fig. 7b).
+    pub meet: Option<[Point; 2]>,
     /// Times the agent was found off the tree's root (a dynamic obstacle between them, or the
     /// agent moved elsewhere) and the tree was re-rooted at the agent.
     pub reanchored: u32,
@@ -812,9 +815,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// Grafts the reverse tree below forward node `a` at reverse node `b` (their segment tested
     /// free) and records the goal joining; returns whether the graft was made.
     fn meet<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {
+        let segment = [self.fwd.pos(a), self.rev.pos(b)];
         let met = self.graft(a, b, meter);
         if met {
             self.stats.met = true;
+            self.stats.meet = Some(segment);
             self.goal_joined(meter);
         }
         met

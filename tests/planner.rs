@@ -659,6 +659,9 @@ fn connect_joins_the_trees_across_open_space() {
                     "seed {seed}: the trees met in the first step"
                 );
                 assert!(p.stats().met);
+                // The joining segment: a forward node and a node of the reverse tree, both
+                // on the path.
+                let [f, r] = p.stats().meet.expect("the meet's segment");
                 p.tree().validate().unwrap();
                 let mut buf = [Point::ZERO; 64];
                 let info = p.path(&mut buf).unwrap();
@@ -668,6 +671,10 @@ fn connect_joins_the_trees_across_open_space() {
                 for w in path.windows(2) {
                     assert!(s.grid.segment_free(w[0], w[1]), "{w:?} crosses a box");
                 }
+                assert!(
+                    path.contains(&f) && path.contains(&r),
+                    "{f:?} {r:?} {path:?}"
+                );
             } else {
                 // Each tree grows at most 5 m per step: 3 steps leave them 6 m apart at best.
                 assert_eq!(steps, None, "seed {seed}");

@@ -3,8 +3,8 @@
 //! metric data, drives agents with the core's protocol, runs the paper's 20-planner matrix in
 //! parallel, and writes CSV, JSON and pictures.
 //!
-//! Without the default feature `sim` only the loaders, the grid graph, the metrics, the clocks
-//! and the drawing are built (no `faer`): what the fuzz targets need.
+//! Without the default feature `sim` only the loaders, the grid graph, the metrics and the
+//! clocks are built (no `faer`, no `plotters`): what the fuzz targets need.
 //!
 //! The core never knows this crate exists: everything here goes through the core's public API
 //! (`Planner`, `Metric`, `Clock`, `DiffusionTable`, ...).
@@ -18,6 +18,7 @@ pub mod bounds;
 pub mod clock;
 #[cfg(feature = "sim")]
 pub mod diffusion;
+#[cfg(feature = "sim")]
 pub mod draw;
 #[cfg(feature = "sim")]
 pub mod experiment;

@@ -65,9 +65,16 @@ enum Command {
         /// Drop a disc of this radius on the planned path once the agent moves (paper Fig. 7).
         #[arg(long)]
         obstacle: Option<f32>,
-        /// Output directory (picture and JSON summary).
+        /// Output directory (pictures and result.json).
         #[arg(long, default_value = "out/run")]
         out: PathBuf,
+        /// Planning time per call in ms (default: the paper's 150).
+        #[arg(long)]
+        t_exp_ms: Option<u64>,
+        /// Also write an animated GIF of the run (run.gif), one frame every N plan calls.
+        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "2",
+              value_parser = clap::value_parser!(u32).range(1..))]
+        animate: Option<u32>,
     },
     /// Run planners x scenarios x repeats and write runs.csv and summary.csv.
     Experiment {
@@ -380,6 +387,8 @@ fn main() -> Result<()> {
             clock,
             obstacle,
             out,
+            animate,
+            t_exp_ms,
         } => {
             let sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
@@ -395,6 +404,8 @@ fn main() -> Result<()> {
                 clock,
                 obstacle,
                 out,
+                animate,
+                t_exp: t_exp_ms.map(std::time::Duration::from_millis),
             })
         }
         Command::Experiment {

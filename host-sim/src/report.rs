@@ -16,7 +16,6 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 
 use anyhow::{Context, Result, anyhow};
 use bi_am_rrt::Config;
@@ -25,19 +24,6 @@ use plotters::prelude::*;
 
 use crate::results::{Manifest, Row, Spread, read_rows};
 use crate::stats::quantile;
-
-/// Registers the embedded DejaVu Sans as plotters' `sans-serif` (no system fonts needed).
-fn fonts() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            dejavu::sans::regular(),
-        );
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Bold, dejavu::sans::bold());
-    });
-}
 
 /// Something drawable on any plotters backend.
 trait Chart {
@@ -51,7 +37,7 @@ fn ok<T, E: std::fmt::Debug>(r: std::result::Result<T, E>) -> Result<T> {
 
 /// Writes `stem.svg` and `stem.png`.
 fn render(chart: &impl Chart, stem: &Path) -> Result<()> {
-    fonts();
+    crate::draw::fonts();
     let (w, h) = chart.size();
     let svg = stem.with_extension("svg");
     {

@@ -1,6 +1,9 @@
 //! The `run` command: one planner drives the agent through a scenario (the built-in bug trap
-//! by default); the result is printed, written as JSON and drawn: `final.png` (trees, path,
-//! trail) and `found.png` (the trees when the goal joined, e.g. right after the meet).
+//! by default); the result is printed, written as JSON and drawn (`draw`): `found.png` when
+//! the goal joins the forward tree, `meet.png` when it joined through a meet (both trees and
+//! the joining segment, the paper's Fig. 7b), `obstacle.png` just after `--obstacle` dropped a
+//! disc on the path and `avoided.png` when the path first goes around it (Fig. 7c-d),
+//! `final.png` and `final.svg` at the end, and with `--animate N` an animated `run.gif`.
 
 use std::path::PathBuf;
 
@@ -13,7 +16,7 @@ use crate::experiment::row;
 use crate::results::Row;
 
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
-use crate::draw::{self, Canvas};
+use crate::draw::{self, Animation, Painter, Scene};
 use crate::maps::Scenario;
 use crate::sim::{GoalRun, Prepared, SimPlanner, drive, with_planner};
 
@@ -33,35 +36,77 @@ pub struct RunArgs {
     pub obstacle: Option<f32>,
     /// Output directory.
     pub out: PathBuf,
+    /// Also write an animated GIF (`run.gif`), one frame every this many plan calls.
+    pub animate: Option<u32>,
+    /// Planning time per call (`None`: the planner's, the paper's 150 ms).
+    pub t_exp: Option<std::time::Duration>,
 }
 
-fn picture(p: &SimPlanner<'_, '_>, trail: &[Point], scenario: &Scenario) -> Canvas {
-    let mut c = Canvas::new(&scenario.map.grid(), 800);
-    c.tree(p.tree(), draw::FORWARD);
-    c.tree(p.reverse_tree(), draw::REVERSE);
-    for (_, circle) in p.map().obstacles().iter() {
-        c.circle(&circle);
-    }
+/// A snapshot of the planner for a picture.
+fn scene(
+    p: &SimPlanner<'_, '_>,
+    trail: &[Point],
+    scenario: &Scenario,
+    active: usize,
+    title: String,
+) -> Scene {
     let mut path = vec![Point::ZERO; p.tree().len().max(1)];
-    if let Ok(bi_am_rrt::PathInfo { len: n, .. }) = p.path(&mut path) {
-        c.polyline(&path[..n], draw::PATH);
+    let n = p.path(&mut path).map_or(0, |i| i.len);
+    path.truncate(n);
+    Scene {
+        title,
+        forward: draw::edges(p.tree()),
+        reverse: draw::edges(p.reverse_tree()),
+        path,
+        trail: trail.to_vec(),
+        circles: p.map().obstacles().iter().map(|(_, c)| c).collect(),
+        start: scenario.start,
+        goals: scenario.goals.clone(),
+        active: Some(active),
+        agent: trail.last().copied(),
+        meet: None,
     }
-    c.polyline(trail, draw::TRAIL);
-    c.dot(scenario.start, 5, Rgb::from([0, 120, 0]));
-    for g in &scenario.goals {
-        c.dot(*g, 4, Rgb::from([0, 0, 200]));
-    }
-    c
 }
 
-use image::Rgb;
+/// The paper's Fig. 7b: the same planner and seed, replayed from the start towards goal 1 one
+/// expansion per call (on the virtual clock), drawn at the expansion where the trees meet:
+/// the forward tree, the reverse tree as it was just before (a meet clears it) and the joining
+/// segment. `None` for a planner without a reverse tree, or when the goal joins otherwise.
+fn meet_scene(prep: &Prepared, mut cfg: bi_am_rrt::Config, seed: u64) -> Result<Option<Scene>> {
+    if !cfg.bidirectional {
+        return Ok(None);
+    }
+    cfg.max_expansions_per_call = 1;
+    let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
+    with_planner(prep, cfg, seed, |p| {
+        p.set_goal(prep.scenario.goals[0])
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        for _ in 0..1_000_000 {
+            let reverse = draw::edges(p.reverse_tree());
+            if p.grow(&clock).goal_in_tree {
+                let Some(meet) = p.stats().meet else {
+                    return Ok(None);
+                };
+                let mut s = scene(p, &[prep.scenario.start], &prep.scenario, 0, String::new());
+                s.reverse = reverse;
+                s.meet = Some(meet);
+                return Ok(Some(s));
+            }
+        }
+        Ok(None)
+    })
+}
 
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
-    let cfg = crate::experiment::parse_planners(&args.planner)?
+    let mut cfg = crate::experiment::parse_planners(&args.planner)?
         .first()
         .copied()
         .context("no planner named")?;
+    if let Some(t) = args.t_exp {
+        anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");
+        cfg.t_exp = t;
+    }
     if let Some(r) = args.obstacle {
         let size = args.scenario.map.grid();
         let most = 0.25 * size.width_m().min(size.height_m());
@@ -80,16 +125,59 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let mut trail = vec![prep.scenario.start];
     let mut found_drawn = false;
     let mut dropped = false;
+    let mut avoided_drawn = false;
+    let mut pictures: Vec<String> = Vec::new();
     let out = args.out.clone();
+    let painter = Painter::new(prep.scenario.map.grid(), 800);
+    let gif = out.join("run.gif");
+    let mut animation = match args.animate {
+        Some(_) => Some(Animation::new(&painter, &gif, 80)?),
+        None => None,
+    };
+    let title = |moment: &str| {
+        format!(
+            "{} on {}, seed {}: {moment}",
+            cfg.name(),
+            prep.scenario.name,
+            args.seed
+        )
+    };
     let started = Instant::now();
+    let mut failure: Option<anyhow::Error> = None;
     let (runs, final_nodes) = with_planner(&prep, cfg, args.seed, |p| {
-        let hook = |p: &mut SimPlanner<'_, '_>, _gi: usize, agent: Point, _call: u32| {
+        let hook = |p: &mut SimPlanner<'_, '_>, gi: usize, agent: Point, call: u32| {
             if trail.last() != Some(&agent) {
                 trail.push(agent);
             }
+            let mut save = |name: &str, s: &Scene| {
+                let r = painter.png(s, &out.join(name));
+                match r {
+                    Ok(()) => pictures.push(name.to_string()),
+                    Err(e) => {
+                        failure.get_or_insert(e);
+                    }
+                }
+            };
             if !found_drawn && p.goal_node().is_some() {
                 found_drawn = true;
-                let _ = picture(p, &trail, &prep.scenario).save(&out.join("found.png"));
+                let s = scene(
+                    p,
+                    &trail,
+                    &prep.scenario,
+                    gi,
+                    title("the goal joins (end of that call)"),
+                );
+                save("found.png", &s);
+            }
+            if dropped && !avoided_drawn {
+                let mut path = vec![Point::ZERO; p.tree().len().max(1)];
+                if p.path(&mut path).is_ok_and(|i| i.to_goal && !i.blocked) {
+                    avoided_drawn = true;
+                    save(
+                        "avoided.png",
+                        &scene(p, &trail, &prep.scenario, gi, title("path around the disc")),
+                    );
+                }
             }
             if let (Some(r), false) = (args.obstacle, dropped)
                 && agent.dist(prep.scenario.start) > 2.0
@@ -107,10 +195,35 @@ pub fn run(args: &RunArgs) -> Result<()> {
                                     "dropped a disc of radius {r} m at ({:.1}, {:.1}) on the path",
                                     w[1].x, w[1].y
                                 );
+                                save(
+                                    "obstacle.png",
+                                    &scene(
+                                        p,
+                                        &trail,
+                                        &prep.scenario,
+                                        gi,
+                                        title("a disc drops on the path"),
+                                    ),
+                                );
                             }
                             break;
                         }
                     }
+                }
+            }
+            if let (Some(every), Some(a)) = (args.animate, animation.as_mut())
+                && call.is_multiple_of(every.max(1))
+                && failure.is_none()
+            {
+                let s = scene(
+                    p,
+                    &trail,
+                    &prep.scenario,
+                    gi,
+                    title(&format!("goal {}, call {call}", gi + 1)),
+                );
+                if let Err(e) = a.frame(&s) {
+                    failure = Some(e);
                 }
             }
         };
@@ -132,9 +245,30 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 hook,
             )?,
         };
-        picture(p, &trail, &prep.scenario).save(&out.join("final.png"))?;
+        let last = runs.last().map_or(0, |g| g.goal_index);
+        let s = scene(p, &trail, &prep.scenario, last, title("the end"));
+        painter.png(&s, &out.join("final.png"))?;
+        painter.svg(&s, &out.join("final.svg"))?;
         Ok((runs, p.tree().len()))
     })?;
+    if let Some(e) = failure {
+        return Err(e.context("drawing a picture"));
+    }
+    if let Some(mut s) = meet_scene(&prep, cfg, args.seed)? {
+        s.title = title("the trees meet (replayed one expansion per call)");
+        painter.png(&s, &args.out.join("meet.png"))?;
+        pictures.insert(0, "meet.png".into());
+    }
+    if let Some(a) = &animation {
+        println!("  animation: {} frames in {}", a.frames, gif.display());
+    }
+    drop(animation);
+    if args.obstacle.is_some() && !dropped {
+        println!(
+            "no disc was dropped: the path never ran 10 m ahead of the agent with the goal further \
+             than the radius + 3 m"
+        );
+    }
     let wall_s = started.elapsed().as_secs_f64();
     let rows: Vec<Row> = runs
         .iter()
@@ -175,6 +309,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         args.out.join("result.json"),
         serde_json::to_string_pretty(&rows)?,
     )?;
-    println!("  pictures and result.json in {}", args.out.display());
+    pictures.push("final.png".into());
+    pictures.push("final.svg".into());
+    println!(
+        "  pictures ({}) and result.json in {}",
+        pictures.join(", "),
+        args.out.display()
+    );
     Ok(())
 }

@@ -497,6 +497,8 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
             clock: ClockKind::Virtual,
             obstacle: Some(r),
             out: dir.path().to_path_buf(),
+            animate: None,
+            t_exp: None,
         };
         let e = host_sim::run::run(&args).unwrap_err().to_string();
         assert!(
@@ -504,6 +506,50 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
             "{e}"
         );
     }
+}
+
+/// Issue 9's pictures: the meet (both trees and the joining segment), the goal joining, a disc
+/// dropped on the path and the path around it, the end (PNG and SVG), an animation.
+#[test]
+fn run_draws_every_moment() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = host_sim::run::RunArgs {
+        scenario: maps::builtin_by_name("bug_trap").unwrap(),
+        planner: "Bi-AM-RRT*(E)".into(),
+        all_goals: false,
+        seed: 1,
+        clock: ClockKind::Virtual,
+        obstacle: Some(1.5),
+        out: dir.path().to_path_buf(),
+        animate: Some(20),
+        t_exp: Some(std::time::Duration::from_millis(10)),
+    };
+    host_sim::run::run(&args).unwrap();
+    for f in [
+        "meet.png",
+        "found.png",
+        "obstacle.png",
+        "avoided.png",
+        "final.png",
+        "final.svg",
+        "run.gif",
+    ] {
+        let len = std::fs::metadata(dir.path().join(f)).map_or(0, |m| m.len());
+        assert!(len > 5_000, "{f}: {len} bytes");
+    }
+    let svg = std::fs::read_to_string(dir.path().join("final.svg")).unwrap();
+    for text in [
+        "Bi-AM-RRT*(E) on bug_trap, seed 1: the end",
+        "forward tree",
+        "10 m",
+    ] {
+        assert!(svg.contains(text), "final.svg lacks {text:?}");
+    }
+    let result = std::fs::read_to_string(dir.path().join("result.json")).unwrap();
+    assert!(
+        result.contains("\"reached\": true") && result.contains("\"collisions\": 0"),
+        "{result}"
+    );
 }
 
 /// The exact optima of the 24 reference legs, as `../shared/anchors/reference-figures.md`
