@@ -265,9 +265,13 @@ enum Command {
     },
     /// Bake a metric table from a map.
     Bake {
-        /// PNG map (mean-threshold rule), or `builtin:NAME`.
+        /// PNG map (mean-threshold rule), ROS map_server YAML (with its PGM or PNG image), or
+        /// `builtin:NAME`.
         #[arg(long)]
         map: String,
+        /// Cell side of a PNG map in metres (default 1).
+        #[arg(long)]
+        resolution: Option<f32>,
         /// Metric to bake: `diffusion` (a table) or `geodesic` (the grid graph).
         #[arg(long, value_enum, default_value = "diffusion")]
         metric: MetricArg,
@@ -367,11 +371,24 @@ impl TableArgs {
     }
 }
 
-fn load_map(spec: &str) -> Result<maps::OwnedGrid> {
-    match spec.strip_prefix("builtin:") {
-        Some(name) => Ok(maps::builtin_by_name(name)?.map),
-        None => maps::load_png(&PathBuf::from(spec)),
+fn load_map(spec: &str, resolution: Option<f32>) -> Result<maps::OwnedGrid> {
+    let mut grid = match spec.strip_prefix("builtin:") {
+        Some(name) => maps::builtin_by_name(name)?.map,
+        None if spec.ends_with(".yaml") || spec.ends_with(".yml") => {
+            if resolution.is_some() {
+                bail!("--resolution is for PNG maps: a ROS map's YAML gives its own");
+            }
+            maps::load_ros_yaml(&PathBuf::from(spec))?.grid
+        }
+        None => maps::load_png(&PathBuf::from(spec))?,
+    };
+    if let Some(r) = resolution {
+        if !(r.is_finite() && r > 0.0) {
+            bail!("--resolution {r}: must be a positive number of metres");
+        }
+        grid.cell_bits = r.to_bits();
     }
+    Ok(grid)
 }
 
 fn main() -> Result<()> {
@@ -673,13 +690,14 @@ fn main() -> Result<()> {
         }
         Command::Bake {
             map,
+            resolution,
             metric,
             out,
             table,
             rust,
             all_pairs,
         } => {
-            let grid = load_map(&map)?;
+            let grid = load_map(&map, resolution)?;
             let t0 = Instant::now();
             match metric {
                 MetricArg::Diffusion => {

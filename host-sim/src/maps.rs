@@ -88,8 +88,28 @@ pub fn load_png(path: &Path) -> Result<OwnedGrid> {
 /// decoding) and images of one dark grey level, which the rule would read as all free (a
 /// uniform light image is an empty map).
 pub fn decode_png(bytes: &[u8], name: &str) -> Result<OwnedGrid> {
-    let reader =
-        || image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png);
+    let (w, h, grey) = decode_grey(bytes, image::ImageFormat::Png, name)?;
+    let mean = grey.iter().map(|&v| v as f64).sum::<f64>() / grey.len() as f64;
+    if grey.iter().all(|&v| v == grey[0]) && grey[0] < 128 {
+        bail!(
+            "map {name} is a single dark grey level ({}): the mean-threshold rule would read it \
+             as all free; draw free space light and obstacles dark",
+            grey[0]
+        );
+    }
+    OwnedGrid::from_fn(w, h, 1.0, |c, r| {
+        (grey[r as usize * w as usize + c as usize] as f64) < mean
+    })
+}
+
+/// Decodes an image to PIL "L" grey levels, row by row from the top, refusing images over
+/// [`MAX_MAP_CELLS`] before decoding them.
+fn decode_grey(
+    bytes: &[u8],
+    format: image::ImageFormat,
+    name: &str,
+) -> Result<(u16, u16, Vec<u8>)> {
+    let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     let (w, h) = reader()
         .into_dimensions()
         .with_context(|| format!("reading the size of map {name}"))?;
@@ -112,17 +132,138 @@ pub fn decode_png(bytes: &[u8], name: &str) -> Result<OwnedGrid> {
         .decode()
         .with_context(|| format!("decoding map {name}"))?
         .to_rgb8();
-    let grey: Vec<u8> = img.pixels().map(|p| pil_grey(p[0], p[1], p[2])).collect();
-    let mean = grey.iter().map(|&v| v as f64).sum::<f64>() / grey.len() as f64;
-    if grey.iter().all(|&v| v == grey[0]) && grey[0] < 128 {
+    let grey = img.pixels().map(|p| pil_grey(p[0], p[1], p[2])).collect();
+    Ok((w as u16, h as u16, grey))
+}
+
+/// A map as a scenario file names it: the grid, and for a ROS map the frame its positions
+/// are given in.
+#[derive(Clone, Debug)]
+pub struct MapFile {
+    /// The grid (cell side from the file, or 1 m for a PNG until `resolution_m` says).
+    pub grid: OwnedGrid,
+    /// ROS map_server maps: the world position of the lower-left corner of the image
+    /// (`origin` x, y). Positions in the scenario file are then in this frame, y up.
+    pub ros_origin: Option<[f64; 2]>,
+}
+
+impl From<OwnedGrid> for MapFile {
+    fn from(grid: OwnedGrid) -> Self {
+        Self {
+            grid,
+            ros_origin: None,
+        }
+    }
+}
+
+/// The fields of a ROS map_server YAML file the loader reads (others are ignored).
+#[derive(Deserialize)]
+struct RosYaml {
+    image: PathBuf,
+    resolution: f32,
+    #[serde(default)]
+    origin: Option<Vec<f64>>,
+    #[serde(default)]
+    negate: Option<serde_yaml_ng::Value>,
+    #[serde(default = "default_occupied")]
+    occupied_thresh: f64,
+    #[serde(default = "default_free")]
+    free_thresh: f64,
+    #[serde(default)]
+    mode: Option<String>,
+}
+
+fn default_occupied() -> f64 {
+    0.65
+}
+
+fn default_free() -> f64 {
+    0.196
+}
+
+/// Reads a ROS map_server map: the YAML file and the image it names (PGM or PNG, relative to
+/// it); see [`ros_map_from`].
+pub fn load_ros_yaml(path: &Path) -> Result<MapFile> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let image: RosYaml =
+        serde_yaml_ng::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let img = path.parent().unwrap_or(Path::new(".")).join(&image.image);
+    let bytes = std::fs::read(&img).with_context(|| format!("reading map {}", img.display()))?;
+    ros_map_from(&text, &bytes, &path.display().to_string())
+}
+
+/// A ROS map_server map from its YAML text and image bytes, with map_server's rule (mode
+/// `trinary` or `scale`): a pixel of grey `v` has occupancy `p = (255 - v) / 255` (`v / 255`
+/// with `negate: 1`); it is an obstacle when `p > occupied_thresh`, free when
+/// `p < free_thresh`, and unknown between, which the planner treats as an obstacle. One pixel
+/// is one cell of `resolution` metres; `origin` is the world pose of the lower-left pixel
+/// (a yaw is refused), y up. Mode `raw` is refused.
+pub fn ros_map_from(yaml: &str, image_bytes: &[u8], name: &str) -> Result<MapFile> {
+    let y: RosYaml = serde_yaml_ng::from_str(yaml).with_context(|| format!("parsing {name}"))?;
+    if !(y.resolution.is_finite() && y.resolution > 0.0) {
         bail!(
-            "map {name} is a single dark grey level ({}): the mean-threshold rule would read it \
-             as all free; draw free space light and obstacles dark",
-            grey[0]
+            "{name}: resolution {} (must be a positive number of metres)",
+            y.resolution
         );
     }
-    OwnedGrid::from_fn(w as u16, h as u16, 1.0, |c, r| {
-        (grey[r as usize * w as usize + c as usize] as f64) < mean
+    let negate = match &y.negate {
+        None => false,
+        Some(serde_yaml_ng::Value::Bool(b)) => *b,
+        Some(serde_yaml_ng::Value::Number(n)) if n.as_i64() == Some(0) => false,
+        Some(serde_yaml_ng::Value::Number(n)) if n.as_i64() == Some(1) => true,
+        Some(v) => bail!("{name}: negate {v:?} (must be 0 or 1)"),
+    };
+    if !(0.0..=1.0).contains(&y.free_thresh)
+        || !(0.0..=1.0).contains(&y.occupied_thresh)
+        || y.free_thresh > y.occupied_thresh
+    {
+        bail!(
+            "{name}: free_thresh {} and occupied_thresh {} must lie in [0, 1], free <= occupied",
+            y.free_thresh,
+            y.occupied_thresh
+        );
+    }
+    match y.mode.as_deref() {
+        None | Some("trinary") | Some("scale") => {}
+        Some(m) => bail!("{name}: mode {m:?} is not supported (trinary or scale)"),
+    }
+    let origin = y.origin.unwrap_or_else(|| vec![0.0, 0.0, 0.0]);
+    let [ox, oy] = match origin[..] {
+        [x, y] | [x, y, _] if x.is_finite() && y.is_finite() => [x, y],
+        _ => bail!("{name}: origin {origin:?} (must be [x, y, yaw])"),
+    };
+    if origin.get(2).is_some_and(|yaw| *yaw != 0.0) {
+        bail!(
+            "{name}: origin yaw {} (rotated maps are not supported)",
+            origin[2]
+        );
+    }
+    let ext = y
+        .image
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let format = match ext.as_deref() {
+        Some("png") => image::ImageFormat::Png,
+        Some("pgm" | "ppm" | "pnm" | "pbm") => image::ImageFormat::Pnm,
+        _ => bail!("{name}: image {} is not a PGM or a PNG", y.image.display()),
+    };
+    let (w, h, grey) = decode_grey(image_bytes, format, name)?;
+    let occupied = |v: u8| {
+        let p = if negate {
+            f64::from(v) / 255.0
+        } else {
+            (255.0 - f64::from(v)) / 255.0
+        };
+        // Occupied, or unknown (between the thresholds): not free.
+        p > y.occupied_thresh || p >= y.free_thresh
+    };
+    let grid = OwnedGrid::from_fn(w, h, y.resolution, |c, r| {
+        occupied(grey[r as usize * w as usize + c as usize])
+    })?;
+    Ok(MapFile {
+        grid,
+        ros_origin: Some([ox, oy]),
     })
 }
 
@@ -149,6 +290,9 @@ struct Entry {
     file: PathBuf,
     #[serde(default)]
     size_m: Option<[f32; 2]>,
+    /// Cell side of a PNG map in metres (default 1; a ROS map's YAML gives its own).
+    #[serde(default)]
+    resolution_m: Option<f32>,
     #[serde(default = "default_sigma")]
     sigma_m: f32,
     start: [f32; 2],
@@ -165,8 +309,15 @@ pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenar
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut scenarios = scenarios_from_str(&text, |file| load_png(&dir.join(file)), only)
-        .with_context(|| format!("in {}", path.display()))?;
+    let load = |file: &Path| -> Result<MapFile> {
+        let path = dir.join(file);
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("yaml" | "yml") => load_ros_yaml(&path),
+            _ => load_png(&path).map(MapFile::from),
+        }
+    };
+    let mut scenarios =
+        scenarios_from_str(&text, load, only).with_context(|| format!("in {}", path.display()))?;
     for s in &mut scenarios {
         s.source = dir.join(&s.source).display().to_string();
     }
@@ -174,10 +325,12 @@ pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenar
 }
 
 /// Parses scenario-file text; `load_map(file)` reads the map a scenario names. Unknown keys,
-/// missing fields and invalid scenarios ([`Scenario::validate`]) are errors.
+/// missing fields and invalid scenarios ([`Scenario::validate`]) are errors. Positions are
+/// metres from the map's top-left corner, y down (a PNG map), or in the map frame of a ROS
+/// map (y up from its `origin`), and are converted to the former.
 pub fn scenarios_from_str(
     text: &str,
-    mut load_map: impl FnMut(&Path) -> Result<OwnedGrid>,
+    mut load_map: impl FnMut(&Path) -> Result<MapFile>,
     only: Option<&[String]>,
 ) -> Result<Vec<Scenario>> {
     let table: toml::Table = toml::from_str(text).context("parsing the scenario file")?;
@@ -196,17 +349,38 @@ pub fn scenarios_from_str(
         let e: Entry = value
             .try_into()
             .with_context(|| format!("scenario {name}"))?;
-        let map = load_map(&e.file)?;
+        let MapFile {
+            grid: mut map,
+            ros_origin,
+        } = load_map(&e.file)?;
+        if let Some(r) = e.resolution_m {
+            if ros_origin.is_some() {
+                bail!("scenario {name}: resolution_m is for PNG maps; a ROS map's YAML gives it");
+            }
+            if !(r.is_finite() && r > 0.0) {
+                bail!("scenario {name}: resolution_m = {r} (must be a positive number of metres)");
+            }
+            map.cell_bits = r.to_bits();
+        }
+        let cell = f32::from_bits(map.cell_bits);
+        let (wm, hm) = (map.width as f32 * cell, map.height as f32 * cell);
         if let Some([w, h]) = e.size_m
-            && (w != map.width as f32 || h != map.height as f32)
+            && ((w - wm).abs() > 1e-3 * wm || (h - hm).abs() > 1e-3 * hm)
         {
             bail!(
-                "scenario {name}: size_m {w} x {h} but the map is {} x {} cells",
+                "scenario {name}: size_m {w} x {h} but the map is {} x {} cells of {cell} m = {wm} x {hm} m",
                 map.width,
                 map.height
             );
         }
-        let pt = |p: [f32; 2]| Point::new(p[0], p[1]);
+        // ROS maps: world (x, y up from the origin) to grid (from the top-left corner, y down).
+        let pt = |p: [f32; 2]| match ros_origin {
+            Some([ox, oy]) => Point::new(
+                (f64::from(p[0]) - ox) as f32,
+                (f64::from(hm) - (f64::from(p[1]) - oy)) as f32,
+            ),
+            None => Point::new(p[0], p[1]),
+        };
         let sc = Scenario {
             name,
             map,

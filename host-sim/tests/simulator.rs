@@ -552,6 +552,119 @@ fn run_draws_every_moment() {
     );
 }
 
+/// Issue 9: ROS map_server maps (YAML + PGM) load with map_server's rule (unknown cells are
+/// obstacles), their resolution and origin (y up), and scenario positions in their frame.
+#[test]
+fn ros_maps_load_with_map_servers_rule() {
+    let dir = tempfile::tempdir().unwrap();
+    // 10 x 6 pixels: free (254) with a wall (0) in column 4 and an unknown patch (205) at
+    // column 7, rows 0-1 (the top).
+    let (w, h) = (10usize, 6usize);
+    let mut pgm = format!("P5\n{w} {h}\n255\n").into_bytes();
+    for r in 0..h {
+        for c in 0..w {
+            pgm.push(match (c, r) {
+                (4, 1..=4) => 0,
+                (7, 0..=1) => 205,
+                _ => 254,
+            });
+        }
+    }
+    std::fs::write(dir.path().join("m.pgm"), &pgm).unwrap();
+    let yaml = |extra: &str| {
+        format!(
+            "image: m.pgm\nresolution: 0.5\norigin: [-2.0, 1.0, 0.0]\noccupied_thresh: 0.65\n\
+             free_thresh: 0.196\n{extra}"
+        )
+    };
+    std::fs::write(dir.path().join("m.yaml"), yaml("negate: 0\n")).unwrap();
+    let m = maps::load_ros_yaml(&dir.path().join("m.yaml")).unwrap();
+    let g = m.grid.grid();
+    assert_eq!((g.cols(), g.rows(), g.cell_size()), (10, 6, 0.5));
+    assert!(g.is_occupied(4, 1) && g.is_occupied(4, 4) && !g.is_occupied(4, 5));
+    assert!(g.is_occupied(7, 0), "unknown is not free");
+    assert!(!g.is_occupied(0, 0) && !g.is_occupied(9, 5));
+    assert_eq!(m.ros_origin, Some([-2.0, 1.0]));
+    // negate: 1 reads the grey levels the other way round (the wall becomes free).
+    std::fs::write(dir.path().join("n.yaml"), yaml("negate: 1\n")).unwrap();
+    let n = maps::load_ros_yaml(&dir.path().join("n.yaml")).unwrap();
+    assert!(!n.grid.grid().is_occupied(4, 1) && n.grid.grid().is_occupied(0, 0));
+    // A scenario in the map frame: (-1.75, 1.25) is the centre of the lower-left cell.
+    let toml = "[ros]\nfile = \"m.yaml\"\nsize_m = [5, 3]\nstart = [-1.75, 1.25]\n\
+                goals = [[2.25, 3.75]]\n";
+    std::fs::write(dir.path().join("s.toml"), toml).unwrap();
+    let sc = maps::load_scenarios(&dir.path().join("s.toml"), None).unwrap();
+    assert_eq!(sc[0].start, bi_am_rrt::Point::new(0.25, 2.75));
+    assert_eq!(sc[0].goals[0], bi_am_rrt::Point::new(4.25, 0.25));
+    // Refused, with the reason.
+    for (extra, what) in [("negate: 2\n", "negate"), ("mode: raw\n", "mode")] {
+        std::fs::write(dir.path().join("bad.yaml"), yaml(extra)).unwrap();
+        let e = maps::load_ros_yaml(&dir.path().join("bad.yaml")).unwrap_err();
+        assert!(format!("{e:#}").contains(what), "{e:#}");
+    }
+    std::fs::write(
+        dir.path().join("yaw.yaml"),
+        "image: m.pgm\nresolution: 0.5\norigin: [0, 0, 0.5]\n",
+    )
+    .unwrap();
+    let e = maps::load_ros_yaml(&dir.path().join("yaw.yaml")).unwrap_err();
+    assert!(format!("{e:#}").contains("yaw"), "{e:#}");
+    let bad = "[ros]\nfile = \"m.yaml\"\nresolution_m = 1.0\nstart = [-1.75, 1.25]\ngoals = [[2.25, 3.75]]\n";
+    std::fs::write(dir.path().join("bad.toml"), bad).unwrap();
+    let e = maps::load_scenarios(&dir.path().join("bad.toml"), None).unwrap_err();
+    assert!(format!("{e:#}").contains("resolution_m"), "{e:#}");
+}
+
+/// Issue 9: a map of any cell size works end to end: the same maze at 0.5 m cells has exactly
+/// half the optimum, bakes, plans, drives without collision and draws.
+#[test]
+fn half_metre_cells_work_end_to_end() {
+    let dir = tempfile::tempdir().unwrap();
+    write_builtin_file(dir.path());
+    let m = builtin::MAZE;
+    let half = |p: bi_am_rrt::Point| format!("[{}, {}]", p.x * 0.5, p.y * 0.5);
+    let goals: Vec<String> = m.goals.iter().map(|g| half(*g)).collect();
+    let toml = format!(
+        "[maze]\nfile = \"maze.png\"\nresolution_m = 0.5\nsize_m = [{}, {}]\nsigma_m = {}\n\
+         start = {}\ngoals = [{}]\n",
+        m.grid.cols() as f32 * 0.5,
+        m.grid.rows() as f32 * 0.5,
+        m.sigma * 0.5,
+        half(m.start),
+        goals.join(", ")
+    );
+    std::fs::write(dir.path().join("half.toml"), toml).unwrap();
+    let sc = maps::load_scenarios(&dir.path().join("half.toml"), None)
+        .unwrap()
+        .remove(0);
+    assert_eq!(sc.map.grid().cell_size(), 0.5);
+    let full = host_sim::optimum::leg_optima(&maps::builtin_by_name("maze").unwrap());
+    let halved = host_sim::optimum::leg_optima(&sc);
+    for (a, b) in full.iter().zip(&halved) {
+        let (a, b) = (a.unwrap(), b.unwrap());
+        assert!((b - 0.5 * a).abs() < 1e-4 * a, "{b} vs {a} / 2");
+    }
+    let out = dir.path().join("run");
+    host_sim::run::run(&host_sim::run::RunArgs {
+        scenario: sc,
+        planner: "Bi-AM-RRT*(D)".into(),
+        all_goals: false,
+        seed: 2,
+        clock: ClockKind::Virtual,
+        obstacle: None,
+        out: out.clone(),
+        animate: None,
+        t_exp: Some(std::time::Duration::from_millis(10)),
+    })
+    .unwrap();
+    let result = std::fs::read_to_string(out.join("result.json")).unwrap();
+    assert!(
+        result.contains("\"reached\": true") && result.contains("\"collisions\": 0"),
+        "{result}"
+    );
+    assert!(out.join("final.png").exists());
+}
+
 /// The exact optima of the 24 reference legs, as `../shared/anchors/reference-figures.md`
 /// gives them (to the metre's thousandth).
 #[test]
