@@ -6,6 +6,14 @@
 //! Without the default feature `sim` only the loaders, the grid graph, the metrics and the
 //! clocks are built (no `faer`, no `plotters`): what the fuzz targets need.
 //!
+//! Modules, one concern each: `maps` (PNG and ROS maps, scenario files, built-ins), `graph`
+//! (grid graph), `diffusion` and `bake` (metric tables), `metrics`, `optimum` (exact shortest
+//! paths), `clock`, `sim` (a scenario prepared for runs, one run under the protocol), `run`
+//! (one run drawn), `draw` (pictures), `experiment` (the matrix), `results` (results folders:
+//! rows, manifest, summary, merge), `report` (charts and the Markdown report), `stats`,
+//! `bench`, `soak`, `stress`, `bounds` and `growth` (measurements). `main.rs` is the
+//! command-line layer.
+//!
 //! The core never knows this crate exists: everything here goes through the core's public API
 //! (`Planner`, `Metric`, `Clock`, `DiffusionTable`, ...).
 

@@ -168,7 +168,7 @@ pub fn drive<'s, 't, C: Clock + ?Sized>(
         let result = run_to_goal(planner, clock, goal, protocol, |p, a, c| {
             on_call(p, gi, a, c)
         })
-        .map_err(|e| anyhow!("goal {gi} of {}: {e}", prep.scenario.name))?;
+        .map_err(|e| anyhow!("goal {} of {}: {e}", gi + 1, prep.scenario.name))?;
         let search_s = result
             .search_ticks
             .map(|t| t as f64 / clock.ticks_per_second() as f64);
