@@ -192,14 +192,6 @@ impl<'g> Painter<'g> {
                 )))?;
             }
         }
-        for c in &scene.circles {
-            let r = (f64::from(c.radius) * self.scale).round().max(1.0) as i32;
-            ok(map.draw(&plotters::element::Circle::new(
-                self.px(c.center),
-                r,
-                OBSTACLE.mix(0.85).filled(),
-            )))?;
-        }
         if scene.trail.len() > 1 {
             let pts: Vec<_> = scene.trail.iter().map(|p| self.px(*p)).collect();
             ok(map.draw(&PathElement::new(pts, line(TRAIL, 3))))?;
@@ -207,6 +199,20 @@ impl<'g> Painter<'g> {
         if scene.path.len() > 1 {
             let pts: Vec<_> = scene.path.iter().map(|p| self.px(*p)).collect();
             ok(map.draw(&PathElement::new(pts, line(PATH, 2))))?;
+        }
+        // Dynamic obstacles over the path (a path crossing one shows through).
+        for c in &scene.circles {
+            let r = (f64::from(c.radius) * self.scale).round().max(2.0) as i32;
+            ok(map.draw(&plotters::element::Circle::new(
+                self.px(c.center),
+                r,
+                OBSTACLE.mix(0.75).filled(),
+            )))?;
+            ok(map.draw(&plotters::element::Circle::new(
+                self.px(c.center),
+                r + 2,
+                line(PATH, 1),
+            )))?;
         }
         if let Some([a, b]) = scene.meet {
             ok(map.draw(&PathElement::new(

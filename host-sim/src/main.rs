@@ -146,6 +146,10 @@ enum Command {
         /// (default: RESULTS/report.md and RESULTS/report/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// A Markdown file written by hand to include after the settings (kept when the
+        /// report is regenerated).
+        #[arg(long)]
+        notes: Option<PathBuf>,
     },
     /// Join results folders of one experiment (its shards, or runs done on several machines)
     /// into one: rows in canonical order, JSON and summaries. Their settings must be equal; a
@@ -472,14 +476,28 @@ fn main() -> Result<()> {
             })
             .map(|_| ())
         }
-        Command::Report { results, out } => {
+        Command::Report {
+            results,
+            out,
+            notes,
+        } => {
             let out = out.unwrap_or_else(|| results.join("report.md"));
-            let command = format!(
+            let mut command = format!(
                 "host-sim report --results {} --out {}",
                 results.display(),
                 out.display()
             );
-            let r = host_sim::report::report(&results, &out, &command)?;
+            let notes = match &notes {
+                Some(n) => {
+                    command.push_str(&format!(" --notes {}", n.display()));
+                    Some(
+                        std::fs::read_to_string(n)
+                            .with_context(|| format!("reading {}", n.display()))?,
+                    )
+                }
+                None => None,
+            };
+            let r = host_sim::report::report(&results, &out, &command, notes.as_deref())?;
             println!(
                 "wrote {} and {} charts (SVG and PNG) in {}",
                 r.markdown.display(),

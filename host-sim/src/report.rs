@@ -453,8 +453,10 @@ pub struct Report {
 }
 
 /// Writes the report of the results folder `results` to `out` (a `.md` file); the charts go
-/// to a folder beside it named after it (`docs/results.md` -> `docs/results/`).
-pub fn report(results: &Path, out: &Path, command: &str) -> Result<Report> {
+/// to a folder beside it named after it (`docs/results.md` -> `docs/results/`). `notes`
+/// (Markdown written by hand, e.g. how the results compare with the paper's) goes after the
+/// settings, so regenerating the report keeps it.
+pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) -> Result<Report> {
     let manifest = Manifest::read(results)?
         .with_context(|| format!("{} has no experiment.json", results.display()))?;
     let rows = read_rows(results, false)?;
@@ -526,6 +528,10 @@ pub fn report(results: &Path, out: &Path, command: &str) -> Result<Report> {
         settings.anytime_ms,
         settings.table
     );
+
+    if let Some(n) = notes {
+        let _ = writeln!(md, "{}\n", n.trim_end());
+    }
 
     // Fig. 6: one chart per scheme.
     let mut scheme_changes: Vec<(Scheme, String, Option<f64>, Option<f64>)> = Vec::new();

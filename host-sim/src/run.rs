@@ -130,8 +130,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let out = args.out.clone();
     let painter = Painter::new(prep.scenario.map.grid(), 800);
     let gif = out.join("run.gif");
+    // Animation frames are smaller: a GIF of full-size frames runs to megabytes.
+    let small = Painter::new(prep.scenario.map.grid(), 480);
     let mut animation = match args.animate {
-        Some(_) => Some(Animation::new(&painter, &gif, 80)?),
+        Some(_) => Some(Animation::new(&small, &gif, 80)?),
         None => None,
     };
     let title = |moment: &str| {

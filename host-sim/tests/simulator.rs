@@ -240,7 +240,7 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     // The report of the merged folder: Fig. 6 (c) for the Bi- pair, box plots per map, the
     // tables, each chart as SVG and PNG.
     let md = dir.path().join("doc").join("results.md");
-    let r = host_sim::report::report(&merged, &md, "test").unwrap();
+    let r = host_sim::report::report(&merged, &md, "test", Some("Notes by hand.")).unwrap();
     let names: Vec<String> = r
         .charts
         .iter()
@@ -258,7 +258,10 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
         }
     }
     let text = std::fs::read_to_string(&md).unwrap();
-    assert!(text.contains("8 of 8 runs"), "{text}");
+    assert!(
+        text.contains("8 of 8 runs") && text.contains("Notes by hand."),
+        "{text}"
+    );
     assert!(text.contains("![fig6c](results/fig6c.svg)"), "{text}");
     assert!(text.contains("| (c) both (Bi-) | maze |"), "{text}");
     assert!(
