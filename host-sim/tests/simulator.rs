@@ -766,3 +766,28 @@ fn a_short_soak_changes_goals_and_stays_safe() {
     assert!(rows.iter().filter(|r| r.search_ms.is_some()).count() >= 3);
     assert!(dir.path().join("soak.csv").exists());
 }
+
+/// docs/results.md is what `report` makes of the data committed beside it (regenerate it with
+/// the command on its first line when the report changes).
+#[test]
+fn docs_results_is_the_report_of_its_data() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let docs = root.join("docs");
+    let notes = std::fs::read_to_string(docs.join("results-notes.md")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("results.md");
+    let command = "host-sim report --results docs/results-data --out docs/results.md --notes docs/results-notes.md";
+    host_sim::report::report(&docs.join("results-data"), &out, command, Some(&notes)).unwrap();
+    let made = std::fs::read_to_string(&out).unwrap();
+    let committed = std::fs::read_to_string(docs.join("results.md")).unwrap();
+    // The folder path in the text is the one given; the committed page was made from the
+    // repository root.
+    let made = made.replace(
+        &docs.join("results-data").display().to_string(),
+        "docs/results-data",
+    );
+    assert!(
+        made == committed,
+        "docs/results.md is stale: regenerate it with {command}"
+    );
+}
