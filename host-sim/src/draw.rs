@@ -72,7 +72,8 @@ pub fn edges<const N: usize>(t: &Tree<N>) -> Vec<[Point; 2]> {
         .collect()
 }
 
-fn ok<T, E: std::fmt::Debug>(r: std::result::Result<T, E>) -> Result<T> {
+/// A plotters result as an `anyhow` one.
+pub(crate) fn ok<T, E: std::fmt::Debug>(r: std::result::Result<T, E>) -> Result<T> {
     r.map_err(|e| anyhow!("drawing: {e:?}"))
 }
 

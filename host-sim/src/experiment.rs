@@ -10,7 +10,7 @@
 //!   moving for that long, and the cost of its path to the goal is recorded (the paper does
 //!   not report this).
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -242,21 +242,27 @@ pub fn row(
 /// The runs `rows` holds in full: every goal the run drives, or up to the first goal it did
 /// not reach. Rows of a run cut short by an interruption do not count (the run is done again).
 fn complete_runs(rows: &[Row], scenarios: &[Scenario], goals: Goals) -> BTreeSet<RunKey> {
-    let mut keys: BTreeSet<RunKey> = rows.iter().map(Row::key).collect();
-    keys.retain(|k| {
-        let mine: Vec<&Row> = rows.iter().filter(|r| r.key() == *k).collect();
-        let wanted = match goals {
-            Goals::First => 1,
-            Goals::All => scenarios
-                .iter()
-                .find(|s| s.name == k.scenario)
-                .map_or(usize::MAX, |s| s.goals.len()),
-        };
-        let last = mine.iter().map(|r| r.goal_index).max().unwrap_or(0);
-        let contiguous = (1..=last).all(|g| mine.iter().filter(|r| r.goal_index == g).count() == 1);
-        contiguous && (last >= wanted || mine.iter().any(|r| !r.reached))
-    });
-    keys
+    let mut by_run: BTreeMap<RunKey, Vec<&Row>> = BTreeMap::new();
+    for r in rows {
+        by_run.entry(r.key()).or_default().push(r);
+    }
+    by_run
+        .into_iter()
+        .filter(|(k, mine)| {
+            let wanted = match goals {
+                Goals::First => 1,
+                Goals::All => scenarios
+                    .iter()
+                    .find(|s| s.name == k.scenario)
+                    .map_or(usize::MAX, |s| s.goals.len()),
+            };
+            let last = mine.iter().map(|r| r.goal_index).max().unwrap_or(0);
+            let contiguous =
+                (1..=last).all(|g| mine.iter().filter(|r| r.goal_index == g).count() == 1);
+            contiguous && (last >= wanted || mine.iter().any(|r| !r.reached))
+        })
+        .map(|(k, _)| k)
+        .collect()
 }
 
 /// Bakes what the planners need and times each map's processing.

@@ -17,11 +17,12 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result};
 use bi_am_rrt::Config;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use crate::draw::ok;
 use crate::results::{Manifest, Row, Spread, read_rows};
 use crate::stats::quantile;
 
@@ -29,10 +30,6 @@ use crate::stats::quantile;
 trait Chart {
     fn size(&self) -> (u32, u32);
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>;
-}
-
-fn ok<T, E: std::fmt::Debug>(r: std::result::Result<T, E>) -> Result<T> {
-    r.map_err(|e| anyhow!("drawing: {e:?}"))
 }
 
 /// Writes `stem.svg` and `stem.png`.
