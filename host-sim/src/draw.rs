@@ -1,4 +1,4 @@
-//! Pictures of a run (`plotters`, PNG, SVG and animated GIF): the map, both trees, the
+//! Pictures of a run (`plotters`; PNG, SVG and animated GIF): the map, both trees, the
 //! planned path, the agent's trail, the dynamic obstacles, the start, the goals numbered from
 //! 1 with the active one ringed, the joining segment of a meet (the paper's Fig. 7b), a title
 //! (planner, map, seed, moment), a legend and a scale bar.
@@ -357,29 +357,45 @@ enum Swatch {
     Square(RGBColor),
 }
 
-/// An animated GIF of a run, one frame per scene added.
+/// An animated GIF of a run, one frame per scene added (frames rendered with plotters,
+/// encoded with `image`'s GIF encoder).
 pub struct Animation<'a, 'g> {
     painter: &'a Painter<'g>,
-    root: DrawingArea<BitMapBackend<'a>, Shift>,
+    encoder: image::codecs::gif::GifEncoder<std::io::BufWriter<std::fs::File>>,
+    delay_ms: u32,
     /// Frames written.
     pub frames: u32,
 }
 
 impl<'a, 'g> Animation<'a, 'g> {
-    /// Starts `path` with `delay_ms` between frames.
-    pub fn new(painter: &'a Painter<'g>, path: &'a Path, delay_ms: u32) -> Result<Self> {
-        let root = ok(BitMapBackend::gif(path, painter.size(), delay_ms))?.into_drawing_area();
+    /// Starts `path` with `delay_ms` between frames, looping.
+    pub fn new(painter: &'a Painter<'g>, path: &Path, delay_ms: u32) -> Result<Self> {
+        let file = std::fs::File::create(path).with_context(|| format!("{}", path.display()))?;
+        let mut encoder =
+            image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+        encoder.set_repeat(image::codecs::gif::Repeat::Infinite)?;
         Ok(Self {
             painter,
-            root,
+            encoder,
+            delay_ms,
             frames: 0,
         })
     }
 
     /// Adds a frame.
     pub fn frame(&mut self, scene: &Scene) -> Result<()> {
-        self.painter.draw(scene, &self.root)?;
-        ok(self.root.present())?;
+        let (w, h) = self.painter.size();
+        let mut buf = vec![0u8; w as usize * h as usize * 3];
+        {
+            let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+            self.painter.draw(scene, &root)?;
+            ok(root.present())?;
+        }
+        let rgb = image::RgbImage::from_raw(w, h, buf).context("image buffer")?;
+        let rgba = image::DynamicImage::ImageRgb8(rgb).into_rgba8();
+        let delay = image::Delay::from_numer_denom_ms(self.delay_ms, 1);
+        self.encoder
+            .encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
         self.frames += 1;
         Ok(())
     }
