@@ -411,14 +411,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     manifest.write(out)?;
     // Rewrite the kept rows (an interrupted run's partial rows are gone), then append.
     if args.existing == Existing::Resume {
-        let mut w = csv::Writer::from_writer(Vec::new());
-        for r in &rows {
-            w.serialize(r)?;
-        }
-        crate::results::write_atomic(
-            &out.join(crate::results::RUNS),
-            &w.into_inner().map_err(|e| anyhow!("{e}"))?,
-        )?;
+        crate::results::write_rows(out, &rows)?;
     }
     let wanted = manifest.runs();
     let todo: Vec<(usize, Config, u64)> = wanted

@@ -23,8 +23,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::draw::ok;
-use crate::results::{Manifest, Row, Spread, read_rows};
-use crate::stats::quantile;
+use crate::results::{Manifest, Row, read_rows};
+use crate::stats::{Spread, mean, quantile};
 
 /// Something drawable on any plotters backend.
 trait Chart {
@@ -417,11 +417,11 @@ impl Cell {
     }
 
     fn search_mean(&self) -> Option<f64> {
-        Spread::of(self.search_s.clone()).mean
+        mean(&self.search_s)
     }
 
     fn path_mean(&self) -> Option<f64> {
-        Spread::of(self.path_m.clone()).mean
+        mean(&self.path_m)
     }
 }
 
@@ -598,12 +598,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 ds.extend(change(co.search_mean(), cp.search_mean()));
                 dp.extend(change(co.path_mean(), cp.path_mean()));
             }
-            scheme_changes.push((
-                sch,
-                m.clone(),
-                crate::stats::mean(&ds),
-                crate::stats::mean(&dp),
-            ));
+            scheme_changes.push((sch, m.clone(), mean(&ds), mean(&dp)));
         }
     }
 

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::clock::ClockKind;
 use crate::maps::Scenario;
-use crate::stats::{mean, quantile};
+use crate::stats::Spread;
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "experiment.json";
@@ -344,26 +344,6 @@ fn short<S: serde::Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error>
     }
 }
 
-/// Median, quartiles and mean of a sample (all `None` when it is empty).
-pub struct Spread {
-    pub q1: Option<f64>,
-    pub median: Option<f64>,
-    pub q3: Option<f64>,
-    pub mean: Option<f64>,
-}
-
-impl Spread {
-    /// The spread of `v`.
-    pub fn of(mut v: Vec<f64>) -> Self {
-        Self {
-            mean: mean(&v),
-            q1: quantile(&mut v, 0.25),
-            median: quantile(&mut v, 0.5),
-            q3: quantile(&mut v, 0.75),
-        }
-    }
-}
-
 /// Groups rows by planner, scenario and goal, in first-seen order.
 pub fn summarise(rows: &[Row]) -> Vec<Summary> {
     let mut keys: Vec<(String, String, usize)> = Vec::new();
@@ -479,14 +459,7 @@ impl RowSink {
 
     /// Appends one run's rows in a single write.
     pub fn append(&mut self, rows: &[Row]) -> Result<()> {
-        let mut w = csv::WriterBuilder::new()
-            .has_headers(self.header)
-            .from_writer(Vec::new());
-        for r in rows {
-            w.serialize(r)?;
-        }
-        let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
-        self.file.write_all(&bytes)?;
+        self.file.write_all(&csv_bytes(rows, self.header)?)?;
         self.file.flush()?;
         self.header = false;
         Ok(())
@@ -506,31 +479,33 @@ pub fn sort_rows(settings: &Settings, rows: &mut [Row]) {
     rows.sort_by_key(pos);
 }
 
+/// `items` as CSV (with a header line when `header`).
+fn csv_bytes<T: Serialize>(items: &[T], header: bool) -> Result<Vec<u8>> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(header)
+        .from_writer(Vec::new());
+    for it in items {
+        w.serialize(it)?;
+    }
+    w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// Replaces `dir/runs.csv` with `rows`, atomically.
+pub fn write_rows(dir: &Path, rows: &[Row]) -> Result<()> {
+    write_atomic(&dir.join(RUNS), &csv_bytes(rows, true)?)
+}
+
 /// Writes a complete folder: `runs.csv` in canonical order, `runs.json`, `summary.csv`,
 /// `summary.json`. Returns the summary.
 pub fn write_complete(dir: &Path, settings: &Settings, rows: &mut [Row]) -> Result<Vec<Summary>> {
     sort_rows(settings, rows);
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows.iter() {
-        w.serialize(r)?;
-    }
-    write_atomic(
-        &dir.join(RUNS),
-        &w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?,
-    )?;
+    write_rows(dir, rows)?;
     write_atomic(
         &dir.join("runs.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
     let summary = summarise(rows);
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for s in &summary {
-        w.serialize(s)?;
-    }
-    write_atomic(
-        &dir.join("summary.csv"),
-        &w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?,
-    )?;
+    write_atomic(&dir.join("summary.csv"), &csv_bytes(&summary, true)?)?;
     write_atomic(
         &dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),

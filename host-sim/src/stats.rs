@@ -1,5 +1,5 @@
-//! Sample statistics shared by the experiment, the bench and the bake: median, mean and
-//! quartiles (linear interpolation between order statistics, as numpy's default).
+//! Sample statistics shared by the experiment, the report, the bench and the bake: median,
+//! mean and quartiles (linear interpolation between order statistics, as numpy's default).
 
 /// Median of a sample (`None` if empty); sorts `v`.
 pub fn median(v: &mut [f64]) -> Option<f64> {
@@ -25,6 +25,26 @@ pub fn quantile(v: &mut [f64], q: f64) -> Option<f64> {
 /// Mean of a sample (`None` if empty).
 pub fn mean(v: &[f64]) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// Median, quartiles and mean of a sample (all `None` when it is empty).
+pub struct Spread {
+    pub q1: Option<f64>,
+    pub median: Option<f64>,
+    pub q3: Option<f64>,
+    pub mean: Option<f64>,
+}
+
+impl Spread {
+    /// The spread of `v`.
+    pub fn of(mut v: Vec<f64>) -> Self {
+        Self {
+            mean: mean(&v),
+            q1: quantile(&mut v, 0.25),
+            median: quantile(&mut v, 0.5),
+            q3: quantile(&mut v, 0.75),
+        }
+    }
 }
 
 #[cfg(test)]
