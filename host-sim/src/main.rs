@@ -41,7 +41,8 @@ enum KindArg {
 enum Command {
     /// Drive an agent from start to goal on one scenario and draw the result.
     Run {
-        /// A built-in scenario (open, bug_trap, maze) ...
+        /// A built-in scenario: open, bug_trap, maze (small fixtures) or trap_100, maze_100,
+        /// office_200 (the paper's sizes) ...
         #[arg(long, default_value = "bug_trap")]
         builtin: String,
         /// ... or a scenario from a file (with --scenario NAME).
@@ -78,7 +79,9 @@ enum Command {
     },
     /// Run planners x scenarios x repeats and write runs.csv and summary.csv.
     Experiment {
-        /// Scenario file (TOML in the form of shared/maps/scenarios.toml).
+        /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
+        /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
+        /// office_200).
         #[arg(long)]
         scenarios: PathBuf,
         /// Comma-separated scenario names (default: all in the file).
@@ -167,7 +170,9 @@ enum Command {
     /// after fixed CPU budgets, against each leg's exact optimum. Writes bench.csv,
     /// summary.csv and summary.md.
     Bench {
-        /// Scenario file (TOML in the form of shared/maps/scenarios.toml).
+        /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
+        /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
+        /// office_200).
         #[arg(long)]
         scenarios: PathBuf,
         /// Comma-separated scenario names (default: all in the file).
@@ -197,7 +202,9 @@ enum Command {
     /// Soak test: one planner and one agent for a long time with a new random goal every few
     /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
     Soak {
-        /// Scenario file (TOML in the form of shared/maps/scenarios.toml).
+        /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
+        /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
+        /// office_200).
         #[arg(long)]
         scenarios: PathBuf,
         /// Scenario name in --scenarios.
@@ -294,7 +301,7 @@ enum Command {
     /// Export a scenario for a firmware: its bit-packed grid, its diffusion table and Rust
     /// source that `include!`s them as flash `static`s (with the start and goals).
     Export {
-        /// Scenario file (TOML).
+        /// Scenario file (TOML), or `builtin`.
         #[arg(long)]
         scenarios: PathBuf,
         /// Scenario to export.
@@ -308,7 +315,7 @@ enum Command {
     },
     /// Measure how the expansion rate changes as the tree grows (no motion, wall clock).
     Growth {
-        /// Scenario file (TOML).
+        /// Scenario file (TOML), or `builtin`.
         #[arg(long)]
         scenarios: PathBuf,
         /// Comma-separated scenario names (default: all in the file).

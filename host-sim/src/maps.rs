@@ -303,9 +303,16 @@ fn default_sigma() -> f32 {
     30.0
 }
 
+/// The name that stands for the built-in scenarios where a scenario file is expected.
+pub const BUILTIN_SET: &str = "builtin";
+
 /// Reads a scenario file; map paths are relative to it. `only` keeps the named scenarios (in
-/// the file's order); an unknown name is an error.
+/// the file's order); an unknown name is an error. The path [`BUILTIN_SET`] (when no such file
+/// exists) reads the built-in scenarios instead, small and paper-sized.
 pub fn load_scenarios(path: &Path, only: Option<&[String]>) -> Result<Vec<Scenario>> {
+    if path == Path::new(BUILTIN_SET) && !path.exists() {
+        return builtin_set(only);
+    }
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
@@ -422,7 +429,19 @@ impl Scenario {
     }
 }
 
-/// The core's built-in scenarios as host scenarios.
+/// Every built-in scenario (small and paper-sized), or the named ones in that order.
+fn builtin_set(only: Option<&[String]>) -> Result<Vec<Scenario>> {
+    match only {
+        None => Ok(builtin::ALL
+            .iter()
+            .chain(builtin::PAPER_SIZED.iter())
+            .map(|s| builtin_scenario(s))
+            .collect()),
+        Some(names) => names.iter().map(|n| builtin_by_name(n)).collect(),
+    }
+}
+
+/// The core's small built-in scenarios as host scenarios.
 pub fn builtin_scenarios() -> Vec<Scenario> {
     builtin::ALL.iter().map(|s| builtin_scenario(s)).collect()
 }
@@ -444,7 +463,11 @@ pub fn builtin_by_name(name: &str) -> Result<Scenario> {
     builtin::by_name(name)
         .map(builtin_scenario)
         .with_context(|| {
-            let names: Vec<_> = builtin::ALL.iter().map(|s| s.name).collect();
+            let names: Vec<_> = builtin::ALL
+                .iter()
+                .chain(builtin::PAPER_SIZED.iter())
+                .map(|s| s.name)
+                .collect();
             format!("no built-in scenario {name:?} (have {names:?})")
         })
 }
@@ -471,5 +494,40 @@ mod tests {
             builtin::MAZE.grid.is_occupied(5, 12)
         );
         assert!(builtin_by_name("nope").is_err());
+    }
+
+    /// `--scenarios builtin` holds the paper-sized maps (100 m, 100 m, 200 m squares), and every
+    /// leg of them has a path: the exact optimum is finite and at least the straight line.
+    #[test]
+    fn builtin_set_has_the_papers_sizes_and_every_leg_has_a_path() {
+        let all = load_scenarios(Path::new(BUILTIN_SET), None).unwrap();
+        assert_eq!(all.len(), builtin::ALL.len() + builtin::PAPER_SIZED.len());
+        let only = ["office_200".to_string(), "trap_100".to_string()];
+        let picked = load_scenarios(Path::new(BUILTIN_SET), Some(&only)).unwrap();
+        assert_eq!(picked.len(), 2);
+        assert_eq!(picked[0].name, "office_200");
+        assert!(load_scenarios(Path::new(BUILTIN_SET), Some(&["nope".into()])).is_err());
+        for (name, side) in [
+            ("trap_100", 100.0),
+            ("maze_100", 100.0),
+            ("office_200", 200.0),
+        ] {
+            let s = builtin_by_name(name).unwrap();
+            let g = s.map.grid();
+            assert_eq!(f32::from(g.cols()) * g.cell_size(), side, "{name}");
+            assert_eq!(f32::from(g.rows()) * g.cell_size(), side, "{name}");
+            assert!(s.goals.len() >= 5, "{name}");
+            let starts = crate::optimum::leg_starts(&s);
+            for (k, opt) in crate::optimum::leg_optima(&s).into_iter().enumerate() {
+                let opt = opt.unwrap_or_else(|| panic!("{name} leg {} unreachable", k + 1));
+                let (a, b) = (starts[k], s.goals[k]);
+                let straight = f64::from(hypot(a.x - b.x, a.y - b.y));
+                assert!(opt >= straight - 1e-3, "{name} leg {}", k + 1);
+            }
+        }
+    }
+
+    fn hypot(dx: f32, dy: f32) -> f32 {
+        (dx * dx + dy * dy).sqrt()
     }
 }
