@@ -14,7 +14,7 @@ use bi_am_rrt::metric::fnv1a32;
 
 use crate::diffusion::{self, DiffusionMap, Options, TableOptions};
 use crate::graph::GridGraph;
-use crate::maps::OwnedGrid;
+use crate::maps::{OwnedGrid, Scenario};
 
 /// A baked diffusion table with its figures.
 pub struct Baked {
@@ -344,4 +344,117 @@ pub fn error_warning(e: &TableError) -> Option<String> {
             100.0 * share
         )
     })
+}
+
+/// `host-sim bake --metric diffusion`: bakes `grid` (called `name` in messages), writes the
+/// table to `out` (and Rust source to `rust`), and prints the figures of the bake and of the
+/// table's error against full precision.
+pub fn diffusion_command(
+    grid: &OwnedGrid,
+    name: &str,
+    out: &Path,
+    table: &TableOptions,
+    rust: Option<&Path>,
+) -> Result<()> {
+    let t0 = Instant::now();
+    let baked = bake_diffusion(grid, &Options::default(), table)?;
+    let secs = t0.elapsed().as_secs_f64();
+    write_file(out, &baked.table)?;
+    let r = &baked.map.report;
+    println!(
+        "{name}: {} nodes, {} non-zeros; graph {:.3} s, matrix {:.3} s, factor {:.3} s, \
+         Lanczos {:.3} s ({} solves, {} restarts), t {:.3} s; total {secs:.3} s",
+        r.nodes,
+        r.nonzeros,
+        r.seconds_graph,
+        r.seconds_matrix,
+        r.seconds_factor,
+        r.seconds_lanczos,
+        r.solves,
+        r.restarts,
+        r.seconds_t
+    );
+    println!("eigenvalues: {:?}", r.eigenvalues);
+    println!(
+        "max relative residual {:.2e}, orthogonality {:.2e}, t = {:.1}, Pearson(d_D, d_G) = {:.4}",
+        r.residuals.iter().fold(0.0f64, |a, &b| a.max(b)),
+        r.orthogonality,
+        r.t,
+        r.pearson
+    );
+    println!("table: {} bytes -> {}", baked.table.len(), out.display());
+    let e = table_error(&baked, 20_000, 1)?;
+    println!(
+        "table vs full precision over {} node pairs: max error {:.3e} (relative {:.3e}), 99th percentile {:.3e}, \
+         {:.2} % of pairs above the quantisation bound {:.3e}; largest distance {:.3e}",
+        e.pairs,
+        e.max_abs,
+        e.max_rel,
+        e.p99_abs,
+        100.0 * e.over_bound,
+        e.bound,
+        e.max_distance
+    );
+    println!(
+        "largest error = {:.2} % of the largest distance",
+        100.0 * e.max_abs / e.max_distance.max(f64::MIN_POSITIVE)
+    );
+    if let Some(w) = error_warning(&e) {
+        eprintln!("{w}");
+    }
+    if let Some(rs) = rust {
+        let src = rust_source("DIFFUSION_TABLE", &baked.table, name);
+        write_file(rs, src.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// `host-sim bake --metric geodesic`: writes the grid graph of `grid` to `out` and prints the
+/// cost of one distance field (and of all of them with `all_pairs`).
+pub fn geodesic_command(grid: &OwnedGrid, name: &str, out: &Path, all_pairs: bool) -> Result<()> {
+    let t0 = Instant::now();
+    let graph = GridGraph::build(&grid.grid());
+    let bytes = graph_bytes(&graph);
+    let secs = t0.elapsed().as_secs_f64();
+    write_file(out, &bytes)?;
+    println!(
+        "{name}: geodesic graph of {} nodes, {} directed edges in {secs:.3} s; {} bytes -> {}",
+        graph.len(),
+        graph.edge_count(),
+        bytes.len(),
+        out.display()
+    );
+    let (per_field, total) = geodesic_costs(&graph, 25, all_pairs);
+    println!(
+        "one distance field (Dijkstra): {:.3} ms (median of 25)",
+        per_field * 1e3
+    );
+    if let Some(t) = total {
+        println!("every field (all-pairs distances, all cores): {t:.2} s");
+    }
+    Ok(())
+}
+
+/// `host-sim export`: writes a scenario's flash files ([`export_flash`]) and prints their
+/// sizes and the table's error.
+pub fn export_command(sc: &Scenario, table: &TableOptions, out: &Path) -> Result<()> {
+    let t0 = Instant::now();
+    let ex = export_flash(sc, &table, out)?;
+    let e = &ex.error;
+    println!(
+        "{}: grid {} bytes, table {} bytes (max error {:.3e} = {:.2} % of the largest distance {:.3e} over {} pairs) in {:.1} s -> {}",
+        sc.name,
+        ex.grid_bytes,
+        ex.table_bytes,
+        e.max_abs,
+        100.0 * e.max_abs / e.max_distance.max(f64::MIN_POSITIVE),
+        e.max_distance,
+        e.pairs,
+        t0.elapsed().as_secs_f64(),
+        ex.source.display()
+    );
+    if let Some(w) = error_warning(e) {
+        eprintln!("{w}");
+    }
+    Ok(())
 }

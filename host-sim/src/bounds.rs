@@ -101,3 +101,30 @@ fn measure<const N: usize, const B: usize>(
         cap: cfg.max_work_per_call,
     })
 }
+
+/// `host-sim frozen`: [`frozen`] on each scenario, printed as CSV lines.
+pub fn print_frozen(scs: Vec<crate::maps::Scenario>, base: Config, calls: u32) -> Result<()> {
+    println!(
+        "map, planner, nodes, mode, calls, max units, median units, max CPU ms, median CPU ms, max expansions, cap"
+    );
+    for sc in scs {
+        let prep = crate::sim::Prepared::new(sc);
+        for r in crate::bounds::frozen(&prep, base, calls)? {
+            println!(
+                "{}, {}, {}, {}, {}, {}, {}, {:.1}, {:.1}, {}, {}",
+                r.map,
+                r.planner,
+                r.nodes,
+                r.mode,
+                r.calls,
+                r.max_units,
+                r.median_units,
+                r.max_cpu_ms,
+                r.median_cpu_ms,
+                r.max_expansions,
+                r.cap
+            );
+        }
+    }
+    Ok(())
+}

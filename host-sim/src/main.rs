@@ -2,14 +2,13 @@
 //! tables. `host-sim --help` lists the commands.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use bi_am_rrt::metric::ElementKind;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_sim::bake;
 use host_sim::clock::ClockKind;
-use host_sim::diffusion::{Options, TableLayout, TableOptions};
+use host_sim::diffusion::{TableLayout, TableOptions};
 use host_sim::experiment::{self, ExperimentArgs, Goals};
 use host_sim::maps;
 use host_sim::run::{self, RunArgs};
@@ -51,7 +50,8 @@ enum Command {
         /// Scenario name in --scenarios.
         #[arg(long)]
         scenario: Option<String>,
-        /// Planner name as in the paper's Table 1.
+        /// Planner name as in the paper's Table 1 (any case; suffix " tuned" for the tuned
+        /// configuration; `@field=value` overrides as in `bench --planners`).
         #[arg(long, default_value = "Bi-AM-RRT*(D)")]
         planner: String,
         /// Run through every goal of the scenario instead of the first only.
@@ -598,56 +598,16 @@ fn main() -> Result<()> {
             t_exp_ms,
             max_calls,
             out,
-        } => {
-            let t0 = Instant::now();
-            let (sum, rows) = stress::run(&stress::StressArgs {
+        } => stress::run_and_report(
+            &stress::StressArgs {
                 runs,
                 planners: experiment::parse_planners(&planners)?,
                 seed,
                 t_exp: std::time::Duration::from_millis(t_exp_ms),
                 max_calls,
-            })?;
-            std::fs::create_dir_all(&out)?;
-            let mut w = csv::Writer::from_path(out.join("stress.csv"))?;
-            for r in &rows {
-                w.serialize(r)?;
-            }
-            w.flush()?;
-            std::fs::write(
-                out.join("summary.json"),
-                serde_json::to_string_pretty(&sum)?,
-            )?;
-            for r in rows.iter().filter(|r| !r.arrived) {
-                println!(
-                    "not arrived: {} {} seed {}: {}{}",
-                    r.map,
-                    r.planner,
-                    r.seed,
-                    r.reason,
-                    r.panic
-                        .as_deref()
-                        .map(|m| format!(" ({m})"))
-                        .unwrap_or_default()
-                );
-            }
-            println!(
-                "stress: {} runs, {} moves, {} unsafe moves, {} panics, {} arrived, {} obstacles, \
-                 {} goal changes ({:.1} s; rows in {})",
-                sum.runs,
-                sum.moves,
-                sum.unsafe_moves,
-                sum.panics,
-                sum.arrived,
-                sum.obstacles,
-                sum.goal_changes,
-                t0.elapsed().as_secs_f64(),
-                out.join("stress.csv").display()
-            );
-            if sum.unsafe_moves > 0 || sum.panics > 0 {
-                bail!("the safety promise was broken");
-            }
-            Ok(())
-        }
+            },
+            &out,
+        ),
         Command::Frozen {
             scenarios,
             maps: names,
@@ -662,29 +622,7 @@ fn main() -> Result<()> {
                 .first()
                 .copied()
                 .context("no planner")?;
-            println!(
-                "map, planner, nodes, mode, calls, max units, median units, max CPU ms, median CPU ms, max expansions, cap"
-            );
-            for sc in scs {
-                let prep = host_sim::sim::Prepared::new(sc);
-                for r in host_sim::bounds::frozen(&prep, base, calls)? {
-                    println!(
-                        "{}, {}, {}, {}, {}, {}, {}, {:.1}, {:.1}, {}, {}",
-                        r.map,
-                        r.planner,
-                        r.nodes,
-                        r.mode,
-                        r.calls,
-                        r.max_units,
-                        r.median_units,
-                        r.max_cpu_ms,
-                        r.median_cpu_ms,
-                        r.max_expansions,
-                        r.cap
-                    );
-                }
-            }
-            Ok(())
+            host_sim::bounds::print_frozen(scs, base, calls)
         }
         Command::Export {
             scenarios,
@@ -693,25 +631,7 @@ fn main() -> Result<()> {
             table,
         } => {
             let sc = maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0);
-            let t0 = Instant::now();
-            let ex = bake::export_flash(&sc, &table.options(), &out)?;
-            let e = &ex.error;
-            println!(
-                "{}: grid {} bytes, table {} bytes (max error {:.3e} = {:.2} % of the largest distance {:.3e} over {} pairs) in {:.1} s -> {}",
-                sc.name,
-                ex.grid_bytes,
-                ex.table_bytes,
-                e.max_abs,
-                100.0 * e.max_abs / e.max_distance.max(f64::MIN_POSITIVE),
-                e.max_distance,
-                e.pairs,
-                t0.elapsed().as_secs_f64(),
-                ex.source.display()
-            );
-            if let Some(w) = bake::error_warning(e) {
-                eprintln!("{w}");
-            }
-            Ok(())
+            bake::export_command(&sc, &table.options(), &out)
         }
         Command::Bake {
             map,
@@ -723,82 +643,12 @@ fn main() -> Result<()> {
             all_pairs,
         } => {
             let grid = load_map(&map, resolution)?;
-            let t0 = Instant::now();
             match metric {
                 MetricArg::Diffusion => {
-                    let baked = bake::bake_diffusion(&grid, &Options::default(), &table.options())?;
-                    let secs = t0.elapsed().as_secs_f64();
-                    bake::write_file(&out, &baked.table)?;
-                    let r = &baked.map.report;
-                    println!(
-                        "{map}: {} nodes, {} non-zeros; graph {:.3} s, matrix {:.3} s, factor {:.3} s, \
-                         Lanczos {:.3} s ({} solves, {} restarts), t {:.3} s; total {secs:.3} s",
-                        r.nodes,
-                        r.nonzeros,
-                        r.seconds_graph,
-                        r.seconds_matrix,
-                        r.seconds_factor,
-                        r.seconds_lanczos,
-                        r.solves,
-                        r.restarts,
-                        r.seconds_t
-                    );
-                    println!("eigenvalues: {:?}", r.eigenvalues);
-                    println!(
-                        "max relative residual {:.2e}, orthogonality {:.2e}, t = {:.1}, Pearson(d_D, d_G) = {:.4}",
-                        r.residuals.iter().fold(0.0f64, |a, &b| a.max(b)),
-                        r.orthogonality,
-                        r.t,
-                        r.pearson
-                    );
-                    println!("table: {} bytes -> {}", baked.table.len(), out.display());
-                    let e = bake::table_error(&baked, 20_000, 1)?;
-                    println!(
-                        "table vs full precision over {} node pairs: max error {:.3e} (relative {:.3e}), 99th percentile {:.3e}, \
-                         {:.2} % of pairs above the quantisation bound {:.3e}; largest distance {:.3e}",
-                        e.pairs,
-                        e.max_abs,
-                        e.max_rel,
-                        e.p99_abs,
-                        100.0 * e.over_bound,
-                        e.bound,
-                        e.max_distance
-                    );
-                    println!(
-                        "largest error = {:.2} % of the largest distance",
-                        100.0 * e.max_abs / e.max_distance.max(f64::MIN_POSITIVE)
-                    );
-                    if let Some(w) = bake::error_warning(&e) {
-                        eprintln!("{w}");
-                    }
-                    if let Some(rs) = rust {
-                        let src = bake::rust_source("DIFFUSION_TABLE", &baked.table, &map);
-                        bake::write_file(&rs, src.as_bytes())?;
-                    }
+                    bake::diffusion_command(&grid, &map, &out, &table.options(), rust.as_deref())
                 }
-                MetricArg::Geodesic => {
-                    let graph = host_sim::graph::GridGraph::build(&grid.grid());
-                    let bytes = bake::graph_bytes(&graph);
-                    let secs = t0.elapsed().as_secs_f64();
-                    bake::write_file(&out, &bytes)?;
-                    println!(
-                        "{map}: geodesic graph of {} nodes, {} directed edges in {secs:.3} s; {} bytes -> {}",
-                        graph.len(),
-                        graph.edge_count(),
-                        bytes.len(),
-                        out.display()
-                    );
-                    let (per_field, total) = bake::geodesic_costs(&graph, 25, all_pairs);
-                    println!(
-                        "one distance field (Dijkstra): {:.3} ms (median of 25)",
-                        per_field * 1e3
-                    );
-                    if let Some(t) = total {
-                        println!("every field (all-pairs distances, all cores): {t:.2} s");
-                    }
-                }
+                MetricArg::Geodesic => bake::geodesic_command(&grid, &map, &out, all_pairs),
             }
-            Ok(())
         }
         Command::Growth {
             scenarios,

@@ -99,9 +99,10 @@ fn meet_scene(prep: &Prepared, mut cfg: bi_am_rrt::Config, seed: u64) -> Result<
 
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
-    let mut cfg = crate::experiment::parse_planners(&args.planner)?
+    // A Table 1 name, optionally with the bench's `@field=value` overrides.
+    let mut cfg = crate::bench::parse_variants(&args.planner)?
         .first()
-        .copied()
+        .map(|v| v.cfg)
         .context("no planner named")?;
     if let Some(t) = args.t_exp {
         anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");

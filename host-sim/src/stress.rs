@@ -263,3 +263,50 @@ fn rng_u32(rng: &mut XorShiftRng) -> u32 {
 fn rng_chance(rng: &mut XorShiftRng, p: f32) -> bool {
     unit_f32(rng) < p
 }
+
+/// `host-sim stress`: [`run`], then stress.csv and summary.json in `out`, a line per run that
+/// did not arrive and the totals; an error if any move was unsafe or any run panicked.
+pub fn run_and_report(args: &StressArgs, out: &std::path::Path) -> Result<()> {
+    let t0 = std::time::Instant::now();
+    let (sum, rows) = run(args)?;
+    std::fs::create_dir_all(out)?;
+    let mut w = csv::Writer::from_path(out.join("stress.csv"))?;
+    for r in &rows {
+        w.serialize(r)?;
+    }
+    w.flush()?;
+    std::fs::write(
+        out.join("summary.json"),
+        serde_json::to_string_pretty(&sum)?,
+    )?;
+    for r in rows.iter().filter(|r| !r.arrived) {
+        println!(
+            "not arrived: {} {} seed {}: {}{}",
+            r.map,
+            r.planner,
+            r.seed,
+            r.reason,
+            r.panic
+                .as_deref()
+                .map(|m| format!(" ({m})"))
+                .unwrap_or_default()
+        );
+    }
+    println!(
+        "stress: {} runs, {} moves, {} unsafe moves, {} panics, {} arrived, {} obstacles, \
+         {} goal changes ({:.1} s; rows in {})",
+        sum.runs,
+        sum.moves,
+        sum.unsafe_moves,
+        sum.panics,
+        sum.arrived,
+        sum.obstacles,
+        sum.goal_changes,
+        t0.elapsed().as_secs_f64(),
+        out.join("stress.csv").display()
+    );
+    if sum.unsafe_moves > 0 || sum.panics > 0 {
+        bail!("the safety promise was broken");
+    }
+    Ok(())
+}
