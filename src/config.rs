@@ -137,6 +137,13 @@ pub struct Config {
     /// is higher than its own (a node that cannot do better than the new one), so the tree keeps
     /// improving forever. Off: a full tree only rewires (the paper).
     pub recycle_when_full: bool,
+    /// With `recycle_when_full`: a leaf is traded only while at least this many other nodes
+    /// share its spatial-index bucket (about `e_max` square), so every part of the map the
+    /// tree has reached keeps that many nodes for the goals that come next instead of giving
+    /// them all to the current path; 0 = no such rule. Capped at `N / (2 x buckets)` so the
+    /// cover holds at most half the arena (none with 256 nodes on a 60 m map, 2 with 8,192
+    /// nodes on the 100 m and 200 m reference maps).
+    pub recycle_cover: u16,
     /// A node added inside the informed ellipse offers itself as parent to its neighbours
     /// (RRT*'s rewiring step) right away, besides the sweeps. Off: only the sweeps rewire
     /// (the paper).
@@ -191,6 +198,7 @@ impl Config {
             clock_every: 0,
             n_max_informed: 0,
             recycle_when_full: false,
+            recycle_cover: 0,
             e_search: 0.0,
             rewire_new: false,
             connect: false,
@@ -211,7 +219,9 @@ impl Config {
     /// - `n_max_informed` 4 `n_max`: the tree densifies inside the informed ellipse after the
     ///   density rule has saturated the rest of the map;
     /// - `recycle_when_full`: a full arena trades leaves that cannot improve the path for
-    ///   states that can;
+    ///   states that can, never one of the last two nodes of a spatial-index bucket
+    ///   (`recycle_cover` 2): a cover of every part of the map reached stays for the next
+    ///   goals (with one node per bucket, about `e_max` apart, rewiring could not link them);
     /// - `rewire_new`: a node added inside the ellipse rewires its neighbours (RRT*'s step);
     /// - `connect`: RRT-Connect's greedy step between the two trees while searching;
     /// - `p_goal` 0.5: half the samples are the goal while it is not in the tree (the paper
@@ -224,6 +234,7 @@ impl Config {
         self.e_search = 15.0;
         self.n_max_informed = self.n_max.saturating_mul(4);
         self.recycle_when_full = true;
+        self.recycle_cover = 2;
         self.rewire_new = true;
         self.connect = true;
         self.p_goal = 0.5;

@@ -253,6 +253,27 @@ impl<const N: usize, const B: usize> SpatialIndex<N, B> {
         }
     }
 
+    /// Whether at least `k` indexed nodes other than `id` share the bucket of `p` (the
+    /// position of `id`), counting no further than that. Returns the answer and the nodes
+    /// visited.
+    pub fn bucket_has_others(&self, id: NodeId, p: Point, k: u16) -> (bool, u32) {
+        let (c, r) = self.bucket_coords(p);
+        let b = cell_index(c, r, self.shape().0);
+        let (mut others, mut seen) = (0u16, 0u32);
+        let _ = self.for_each_in_bucket(b, |n| {
+            seen = seen.saturating_add(1);
+            if n != id {
+                others = others.saturating_add(1);
+            }
+            if others >= k {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        (others >= k, seen)
+    }
+
     /// The indexed node nearest to `q` (Euclidean) with its squared distance.
     pub fn nearest(&self, q: Point, positions: &[Point]) -> Option<(NodeId, f32)> {
         self.nearest_where(q, positions, |_| true)

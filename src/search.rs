@@ -63,6 +63,14 @@ const STEER_BATCH_U16: u16 = 32;
 /// The neighbour list type.
 pub(crate) type Near = heapless::Vec<NodeId, NEAR_CAP>;
 
+/// What a new state offers a full arena ([`Config::recycle_when_full`]): a leaf may give up
+/// its slot when its cost bound is above `bound` and at least `cover` other nodes share its
+/// index bucket ([`Config::recycle_cover`]).
+pub(crate) struct Trade {
+    bound: Cost,
+    cover: u16,
+}
+
 /// Two states closer than this fraction of a grid cell are the same state: a new sample there
 /// is dropped, and a goal there joins as that node.
 pub(crate) const DUPLICATE: f32 = 1e-4;
@@ -540,8 +548,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // A full tree may trade a leaf for a state that can shorten the path (tuned).
         let trade = (cfg.recycle_when_full && informed).then(|| {
             let goal = view.as_ref().map_or(x_new, |v| v.goal);
-            self.cost(parent)
-                .extend(self.pos(parent).dist(x_new) + x_new.dist(goal), false)
+            Trade {
+                bound: self
+                    .cost(parent)
+                    .extend(self.pos(parent).dist(x_new) + x_new.dist(goal), false),
+                cover: self.cover(cfg.recycle_cover),
+            }
         });
         let id = self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?;
         // RRT*'s rewiring around the new node: each neighbour takes it as parent when that is
@@ -627,7 +639,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         pos: Point,
         parent: NodeId,
         target: Option<&mut Target>,
-        trade: Option<Cost>,
+        trade: Option<Trade>,
         meter: &Meter<'_, C>,
         full: &mut bool,
     ) -> Option<NodeId> {
@@ -642,7 +654,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
         let mut keep = [parent, t.node.unwrap_or(parent)];
         let above = if needs_room { None } else { trade };
-        if !self.recycle_above(rng, t.pos, &mut keep, above, meter) {
+        if !self.recycle_above(rng, t.pos, &mut keep, above.as_ref(), meter) {
             return None;
         }
         if t.node.is_some() {
@@ -667,14 +679,32 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         self.recycle_above(rng, toward, keep, None, meter)
     }
 
-    /// [`TreeStore::recycle`], removing only a leaf whose score is above `bound` when given
-    /// (and then without the fallback scan: no such leaf among the draws, no removal).
-    pub(crate) fn recycle_above<R: Rng + ?Sized, C: Clock + ?Sized>(
+    /// The cover a trade keeps per index bucket: `k`, at most `N / (2 x buckets)`, so the
+    /// cover never holds more than half the arena (a small arena on a large map keeps none).
+    fn cover(&self, k: u16) -> u16 {
+        let (cols, rows) = self.index.shape();
+        let buckets = usize::from(cols)
+            .saturating_mul(usize::from(rows))
+            .saturating_mul(2);
+        k.min(to_u16(N.checked_div(buckets).unwrap_or(0)))
+    }
+
+    /// Whether at least `k` other nodes share the index bucket of node `id`.
+    fn has_company<C: Clock + ?Sized>(&self, id: NodeId, k: u16, meter: &Meter<'_, C>) -> bool {
+        let (yes, seen) = self.index.bucket_has_others(id, self.pos(id), k);
+        meter.charge(seen.saturating_add(2));
+        yes
+    }
+
+    /// [`TreeStore::recycle`] for a trade when given: removing only a leaf whose score is
+    /// above the trade's bound and which keeps the trade's cover (without the fallback scan:
+    /// no such leaf among the draws, no removal).
+    fn recycle_above<R: Rng + ?Sized, C: Clock + ?Sized>(
         &mut self,
         rng: &mut R,
         toward: Point,
         keep: &mut [NodeId],
-        bound: Option<Cost>,
+        trade: Option<&Trade>,
         meter: &Meter<'_, C>,
     ) -> bool {
         const DRAWS: usize = 16;
@@ -687,21 +717,31 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         };
         // Blocked paths first (Cost orders them last, so they score highest).
         let score = |s: &Self, id: NodeId| s.cost(id).extend(s.pos(id).dist(toward), false);
-        let mut best: Option<(Cost, NodeId)> = None;
+        let mut drawn: heapless::Vec<(Cost, NodeId), DRAWS> = heapless::Vec::new();
         for _ in 0..DRAWS {
             let id = NodeId(to_u16(rng.next_u32().checked_rem(units(len)).unwrap_or(0)));
-            if usable(self, id) {
-                let sc = score(self, id);
-                if best.is_none_or(|(b, _)| sc > b) {
-                    best = Some((sc, id));
-                }
+            if usable(self, id) && !drawn.iter().any(|&(_, d)| d == id) {
+                let _ = drawn.push((score(self, id), id));
             }
         }
-        if let Some(b) = bound
-            && best.is_none_or(|(sc, _)| sc <= b)
-        {
-            meter.charge(units(DRAWS).saturating_add(8));
-            return false;
+        // Highest score first; among equal scores the first drawn.
+        sort_small_by(&mut drawn, |a, b| {
+            b.0.partial_cmp(&a.0).unwrap_or(core::cmp::Ordering::Equal)
+        });
+        let mut best = drawn.first().copied();
+        if let Some(t) = trade {
+            // A trade takes the best-scored leaf above the bound whose bucket keeps the
+            // cover: every part of the map the tree has reached keeps a node for the goals
+            // to come.
+            best = drawn
+                .iter()
+                .take_while(|&&(sc, _)| sc > t.bound)
+                .find(|&&(_, id)| t.cover == 0 || self.has_company(id, t.cover, meter))
+                .copied();
+            if best.is_none() {
+                meter.charge(units(DRAWS).saturating_add(8));
+                return false;
+            }
         }
         let mut scanned: usize = 0;
         if best.is_none() {

@@ -2,6 +2,7 @@
 
 mod common;
 
+use std::collections::HashSet;
 use std::time::Duration;
 
 use bi_am_rrt::builtin::{self, Scenario};
@@ -570,10 +571,75 @@ fn a_full_tuned_tree_keeps_improving() {
         last.push((at_full, end.length));
     }
     // Measured (seed 11, 200 calls of 20 ms): the paper's 96.2 m stays 96.2 m once full; the
-    // tuned tree goes on from 85.0 m to 84.5 m by trading leaves (the optimum is 74.4 m; a
-    // 256-node tree on this map stalls there, whatever the rewiring settings tried).
+    // tuned tree goes on from 95.6 m to 94.7 m by trading leaves (the optimum is 74.4 m; a
+    // 256-node tree on this map stalls far from it, whatever the rewiring settings tried).
     let (full, end) = last[1];
     assert!(end < full, "tuned: {full} m when full, {end} m after");
+}
+
+/// The occupied buckets of the planner's spatial index (`side`-metre squares from the origin).
+fn occupied_buckets(tree: &bi_am_rrt::tree::Tree<1024>, side: f32) -> HashSet<(u32, u32)> {
+    tree.positions()
+        .iter()
+        .map(|p| ((p.x / side) as u32, (p.y / side) as u32))
+        .collect()
+}
+
+/// Regression (tuned bug_trap protocol, leg 4 travelled 1.40 x the optimum): a full tuned tree
+/// traded every leaf far from the current goal's path for states near it, so the part of the
+/// map the next goal needed was empty and the agent set off the long way round. With
+/// `recycle_cover`, trades never take the last nodes of an index bucket: every bucket the
+/// tree reached keeps a node. Without it the same run empties buckets (the test can fail).
+/// 1,024 nodes on the 60 m map: the cover's cap (`N / (2 x buckets)`) allows 2 per bucket.
+#[test]
+fn trades_keep_a_cover_of_the_map() {
+    let s = &builtin::BUG_TRAP;
+    let tuned = Config::bi_am_rrt(MetricKind::Euclidean).tuned();
+    assert!(tuned.recycle_cover > 0);
+    let mut uncovered = Vec::new();
+    for cover in [tuned.recycle_cover, 0] {
+        let cfg = Config {
+            recycle_cover: cover,
+            ..tuned
+        };
+        let mut storage = Box::new(Storage::<1024, 256>::new());
+        let mut p = planner_on(&mut storage, s, Euclidean, cfg, 11);
+        let side = bi_am_rrt::index::SpatialIndex::<1024, 256>::with_bounds(
+            s.grid.width_m(),
+            s.grid.height_m(),
+            test_config(cfg, s).e_max,
+        )
+        .unwrap()
+        .bucket_side();
+        p.set_goal(s.goals[0]).unwrap();
+        let clock = clock();
+        let mut when_full = None;
+        for _ in 0..200 {
+            let pr = p.grow(&clock);
+            if pr.nodes == 1024 && pr.goal_in_tree && when_full.is_none() {
+                when_full = Some((
+                    occupied_buckets(p.tree(), side),
+                    p.tree().positions().to_vec(),
+                ));
+            }
+        }
+        let (before, positions) = when_full.expect("the arena filled with the goal in the tree");
+        assert_ne!(
+            positions,
+            p.tree().positions(),
+            "cover {cover}: the full tree traded nodes"
+        );
+        let after = occupied_buckets(p.tree(), side);
+        p.tree().validate().unwrap();
+        uncovered.push(before.difference(&after).count());
+        eprintln!(
+            "cover {cover}: {} buckets occupied when full, {} of them empty 200 calls later",
+            before.len(),
+            uncovered.last().unwrap()
+        );
+    }
+    assert_eq!(uncovered[0], 0, "with the cover rule no bucket empties");
+    assert!(uncovered[1] > 0, "without it, trades empty buckets");
 }
 
 #[test]

@@ -439,7 +439,7 @@ pub fn geodesic_command(grid: &OwnedGrid, name: &str, out: &Path, all_pairs: boo
 /// sizes and the table's error.
 pub fn export_command(sc: &Scenario, table: &TableOptions, out: &Path) -> Result<()> {
     let t0 = Instant::now();
-    let ex = export_flash(sc, &table, out)?;
+    let ex = export_flash(sc, table, out)?;
     let e = &ex.error;
     println!(
         "{}: grid {} bytes, table {} bytes (max error {:.3e} = {:.2} % of the largest distance {:.3e} over {} pairs) in {:.1} s -> {}",
