@@ -210,7 +210,8 @@ enum Command {
         /// Scenario name in --scenarios.
         #[arg(long)]
         scenario: String,
-        /// Planner name (Table 1, optionally with the suffix " tuned").
+        /// Planner name (Table 1, optionally with the suffix " tuned" and the bench's
+        /// `@field=value` overrides).
         #[arg(long, default_value = "Bi-AM-RRT*(D) tuned")]
         planner: String,
         /// Length in minutes of planner CPU time.
@@ -574,10 +575,11 @@ fn main() -> Result<()> {
                 bail!("--minutes, --goal-every and --speed must be positive");
             }
             let mut scs = maps::load_scenarios(&scenarios, Some(&[scenario]))?;
-            let cfg = experiment::parse_planners(&planner)?
+            let cfg = host_sim::bench::parse_variants(&planner)?
                 .into_iter()
                 .next()
-                .context("no planner")?;
+                .context("no planner")?
+                .cfg;
             host_sim::soak::run(&host_sim::soak::SoakArgs {
                 scenario: scs.remove(0),
                 cfg,
