@@ -270,12 +270,14 @@ pub static ALL: [&Scenario; 3] = [&OPEN, &BUG_TRAP, &MAZE];
 /// The built-in scenarios of the paper's sizes.
 pub static PAPER_SIZED: [&Scenario; 3] = [&TRAP_100, &MAZE_100, &OFFICE_200];
 
+/// Every built-in scenario: [`ALL`], then [`PAPER_SIZED`].
+pub fn every() -> impl Iterator<Item = &'static Scenario> {
+    ALL.iter().chain(PAPER_SIZED.iter()).copied()
+}
+
 /// The built-in scenario with this name (small or paper-sized).
 pub fn by_name(name: &str) -> Option<&'static Scenario> {
-    ALL.iter()
-        .chain(PAPER_SIZED.iter())
-        .copied()
-        .find(|s| s.name == name)
+    every().find(|s| s.name == name)
 }
 
 #[cfg(test)]
@@ -284,7 +286,7 @@ mod tests {
 
     #[test]
     fn starts_and_goals_are_free() {
-        for s in ALL.iter().chain(PAPER_SIZED.iter()) {
+        for s in every() {
             assert!(s.grid.point_free(s.start), "{}", s.name);
             for g in s.goals {
                 assert!(s.grid.point_free(*g), "{} {g:?}", s.name);

@@ -64,8 +64,8 @@ const STEER_BATCH_U16: u16 = 32;
 pub(crate) type Near = heapless::Vec<NodeId, NEAR_CAP>;
 
 /// What a new state offers a full arena ([`Config::recycle_when_full`]): a leaf may give up
-/// its slot when its cost bound is above `bound` and at least `cover` other nodes share its
-/// index bucket ([`Config::recycle_cover`]).
+/// its slot when its cost bound is above `bound` and at least `cover` other nodes (capped by
+/// [`TreeStore::cover`]) share its index bucket ([`Config::recycle_cover`]).
 pub(crate) struct Trade {
     bound: Cost,
     cover: u16,
@@ -552,7 +552,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 bound: self
                     .cost(parent)
                     .extend(self.pos(parent).dist(x_new) + x_new.dist(goal), false),
-                cover: self.cover(cfg.recycle_cover),
+                cover: cfg.recycle_cover,
             }
         });
         let id = self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?;
@@ -725,18 +725,17 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
         }
         // Highest score first; among equal scores the first drawn.
-        sort_small_by(&mut drawn, |a, b| {
-            b.0.partial_cmp(&a.0).unwrap_or(core::cmp::Ordering::Equal)
-        });
+        sort_small_by(&mut drawn, |a, b| b.0.cmp(&a.0));
         let mut best = drawn.first().copied();
         if let Some(t) = trade {
             // A trade takes the best-scored leaf above the bound whose bucket keeps the
             // cover: every part of the map the tree has reached keeps a node for the goals
             // to come.
+            let cover = self.cover(t.cover);
             best = drawn
                 .iter()
                 .take_while(|&&(sc, _)| sc > t.bound)
-                .find(|&&(_, id)| t.cover == 0 || self.has_company(id, t.cover, meter))
+                .find(|&&(_, id)| cover == 0 || self.has_company(id, cover, meter))
                 .copied();
             if best.is_none() {
                 meter.charge(units(DRAWS).saturating_add(8));

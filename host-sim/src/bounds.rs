@@ -109,7 +109,7 @@ pub fn print_frozen(scs: Vec<crate::maps::Scenario>, base: Config, calls: u32) -
     );
     for sc in scs {
         let prep = crate::sim::Prepared::new(sc);
-        for r in crate::bounds::frozen(&prep, base, calls)? {
+        for r in frozen(&prep, base, calls)? {
             println!(
                 "{}, {}, {}, {}, {}, {}, {}, {:.1}, {:.1}, {}, {}",
                 r.map,

@@ -432,11 +432,7 @@ impl Scenario {
 /// Every built-in scenario (small and paper-sized), or the named ones in that order.
 fn builtin_set(only: Option<&[String]>) -> Result<Vec<Scenario>> {
     match only {
-        None => Ok(builtin::ALL
-            .iter()
-            .chain(builtin::PAPER_SIZED.iter())
-            .map(|s| builtin_scenario(s))
-            .collect()),
+        None => Ok(builtin::every().map(builtin_scenario).collect()),
         Some(names) => names.iter().map(|n| builtin_by_name(n)).collect(),
     }
 }
@@ -463,11 +459,7 @@ pub fn builtin_by_name(name: &str) -> Result<Scenario> {
     builtin::by_name(name)
         .map(builtin_scenario)
         .with_context(|| {
-            let names: Vec<_> = builtin::ALL
-                .iter()
-                .chain(builtin::PAPER_SIZED.iter())
-                .map(|s| s.name)
-                .collect();
+            let names: Vec<_> = builtin::every().map(|s| s.name).collect();
             format!("no built-in scenario {name:?} (have {names:?})")
         })
 }
@@ -520,14 +512,9 @@ mod tests {
             let starts = crate::optimum::leg_starts(&s);
             for (k, opt) in crate::optimum::leg_optima(&s).into_iter().enumerate() {
                 let opt = opt.unwrap_or_else(|| panic!("{name} leg {} unreachable", k + 1));
-                let (a, b) = (starts[k], s.goals[k]);
-                let straight = f64::from(hypot(a.x - b.x, a.y - b.y));
+                let straight = f64::from(starts[k].dist(s.goals[k]));
                 assert!(opt >= straight - 1e-3, "{name} leg {}", k + 1);
             }
         }
-    }
-
-    fn hypot(dx: f32, dy: f32) -> f32 {
-        (dx * dx + dy * dy).sqrt()
     }
 }
