@@ -85,7 +85,12 @@ impl Prepared {
         self.diffusion
             .get_or_init(|| {
                 let t0 = Instant::now();
+                // Verified once here (checksum included); `metric` borrows it again per run.
                 let r = bake_diffusion(&self.scenario.map, &Options::default(), &self.table)
+                    .and_then(|b| match DiffusionTable::new(&b.table) {
+                        Ok(_) => Ok(b),
+                        Err(e) => Err(anyhow!("baked table rejected: {e}")),
+                    })
                     .map_err(|e| format!("{e:#}"));
                 let _ = self.bake_seconds.set(t0.elapsed().as_secs_f64());
                 r
@@ -99,7 +104,8 @@ impl Prepared {
         Ok(match kind {
             MetricKind::Euclidean => AnyMetric::Euclidean,
             MetricKind::Diffusion => AnyMetric::Diffusion(
-                DiffusionTable::new(&self.diffusion()?.table).map_err(|e| anyhow!("table: {e}"))?,
+                DiffusionTable::new_unverified(&self.diffusion()?.table)
+                    .map_err(|e| anyhow!("table: {e}"))?,
             ),
             MetricKind::Geodesic => AnyMetric::Geodesic(Geodesic::with_cache_bytes(
                 self.graph(),

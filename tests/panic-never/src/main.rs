@@ -112,6 +112,9 @@ fn main() -> ! {
             sink ^= t.distance(point(), point()).to_bits();
             sink ^= exercise_planner(&mut storage, g, t);
         }
+        if let Ok(t) = DiffusionTable::new_unverified(black_box(&table[..])) {
+            sink ^= t.distance(point(), point()).to_bits();
+        }
         sink ^= exercise_planner(&mut storage, g, Euclidean);
     }
     // Tree and index on their own.
