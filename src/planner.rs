@@ -66,6 +66,10 @@ use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
 use crate::tree::{Cost, NodeId, Tree};
 
+/// Most path nodes one call re-roots past while following the agent ([`Planner::plan`]): the
+/// next waypoint and the nodes the agent already stands on.
+pub const FOLLOW_STEPS: usize = 4;
+
 /// Storage for a planner's two trees: `N` nodes and `B` index buckets each. Keep it wherever
 /// there is room (a `static`, a `Box`, the stack of a thread with a large stack); the planner
 /// borrows it.
@@ -437,16 +441,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     ///
     /// # Bounded work
     ///
-    /// `t_exp` counts from the moment of the call: anchoring and following the agent (each at
-    /// most one O(N) re-rooting) spend it first (following is retried once after the
-    /// expansions when it could not advance before them). A call stops expanding when `t_exp` has
+    /// `t_exp` counts from the moment of the call: anchoring the agent (at most one O(N)
+    /// re-rooting) and following it (at most [`FOLLOW_STEPS`]) spend it first (following is
+    /// retried once after the expansions when it could not advance before them). A call stops expanding when `t_exp` has
     /// passed on `clock`, after `max_expansions_per_call` expansions, or once
     /// `max_work_per_call` work units are done, whichever comes first; every rewiring phase
     /// checks the same limits before each node it visits, and the metric nearest scan every 64
     /// nodes (with [`Config::clock_every`] set, these checks reuse the last clock reading until
     /// that much work has been done since it, adding at most that much work to the overrun).
     /// On a real clock a call therefore overruns `t_exp` by at most the rest of one
-    /// expansion step (plus one re-rooting when following is retried): measured on a
+    /// expansion step (plus the re-rootings of a retried follow): measured on a
     /// Cortex-M4F model (`examples/firmware.rs`, office, 2 x 2,048 nodes, 150 ms), 474 us at
     /// worst, median call 150.10 ms. And whatever the clock (even one that never advances) a
     /// call does at most
@@ -644,8 +648,22 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
-    /// Re-roots at the path's next node when the agent has reached the root.
+    /// Re-roots at the path's next node when the agent has reached the root, and on past nodes
+    /// the agent already stands on (a zero-length edge would hold it for a call), at most
+    /// [`FOLLOW_STEPS`] nodes per call.
     fn follow<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) -> bool {
+        let mut advanced = false;
+        for _ in 0..FOLLOW_STEPS {
+            if !self.follow_once(agent, meter) {
+                break;
+            }
+            advanced = true;
+        }
+        advanced
+    }
+
+    /// One step of [`Planner::follow`].
+    fn follow_once<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) -> bool {
         let root = self.root_position();
         if agent.dist(root) > self.cfg.e_max / 10.0 {
             return false;
@@ -666,6 +684,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if tree.parent(next) != tree.root() || tree.edge_blocked(next) != Some(false) {
             return false;
         }
+        let next = self.split_long_edge(next, meter);
         // The agent is near the root, not always on it: it must see the next node in a
         // straight free line, or it first finishes its way to the root.
         if !self.map.free_path(agent, self.fwd.pos(next)) {
@@ -677,6 +696,48 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         self.fwd.restart_sweeps();
         true
+    }
+
+    /// Keeps the agent's commitment short: when the edge from the root to the path's next node
+    /// `next` is longer than `e_max` (search steps, connections, shortcuts and rewiring all
+    /// make long straight edges), a node `e_max` along it becomes the next waypoint instead,
+    /// so a goal that changes never finds the agent bound to a root far away. The edge was
+    /// free, so are its parts. Returns the node to re-root at: `next` when the edge is short
+    /// or the arena has no slot to give.
+    fn split_long_edge<C: Clock + ?Sized>(&mut self, next: NodeId, meter: &Meter<'_, C>) -> NodeId {
+        let Some(root) = self.fwd.tree.root() else {
+            return next;
+        };
+        let (a, b) = (self.fwd.pos(root), self.fwd.pos(next));
+        if a.dist(b) <= self.cfg.e_max {
+            return next;
+        }
+        let mut keep = [next, self.goal_node().unwrap_or(next)];
+        if self.fwd.tree.is_full() {
+            let toward = self.goal.map_or(b, |g| g.pos);
+            if !self.fwd.recycle(&mut self.rng, toward, &mut keep, meter) {
+                return next;
+            }
+            self.rename_goal(keep[1]);
+        }
+        let [next, _] = keep;
+        let Some(root) = self.fwd.tree.root() else {
+            return next;
+        };
+        let Ok(mid) = self
+            .fwd
+            .insert(a.step_towards(b, self.cfg.e_max), root, false)
+        else {
+            return next;
+        };
+        match self.fwd.tree.set_parent(next, mid, false) {
+            Ok(moved) => {
+                meter.charge(units(moved).saturating_add(4));
+                mid
+            }
+            // Cannot happen (`mid` is a new leaf); it would stay a harmless leaf.
+            Err(_) => next,
+        }
     }
 
     /// Sub-budget for a rewiring phase.

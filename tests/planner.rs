@@ -758,3 +758,35 @@ fn connect_joins_the_trees_across_open_space() {
         }
     }
 }
+
+/// The soak regression (issue 10): with path shortcuts the tuned tree's path is a few long
+/// straight edges, and the root, which the agent must reach before it can turn, jumped to the
+/// next node tens of metres ahead. A goal that changed meanwhile found the agent bound to it:
+/// on office, planned / optimal went from 1.02 in the first minute to 1.23 in the fourth (one
+/// goal 10.8 m away cost 80 m). The root now advances at most `e_max` at a time.
+#[test]
+fn regression_a_new_goal_finds_the_agent_bound_to_a_far_root() {
+    let s = &builtin::BUG_TRAP;
+    let table = landmark_table(&s.grid, 8);
+    let cfg = test_config(Config::bi_am_rrt(MetricKind::Diffusion).tuned(), s);
+    let mut storage = Box::new(Storage::<N, B>::new());
+    let mut p = planner_on(
+        &mut storage,
+        s,
+        DiffusionTable::new(&table).unwrap(),
+        cfg,
+        5,
+    );
+    let clock = clock();
+    let mut farthest = 0.0f32;
+    for goal in s.goals.iter().chain(s.goals.iter().rev()) {
+        let r = drive(&mut p, &clock, *goal, Protocol::default(), |p, agent, _| {
+            farthest = farthest.max(agent.dist(p.root_position()));
+        });
+        assert!(r.reached && r.collisions == 0, "goal {goal:?}: {r:?}");
+    }
+    assert!(
+        farthest <= 1.1 * cfg.e_max + 1e-3,
+        "the agent was bound to a root {farthest} m away"
+    );
+}
