@@ -165,6 +165,14 @@ pub struct Config {
     /// 2013: after the shortcuts, the path's nodes are its corners, where a new node can still
     /// shorten it); 0 = never (the paper).
     pub p_beacon: f32,
+    /// Longest step of the root along the path, in metres: the root is the agent's next
+    /// waypoint, and the agent must reach it before it can turn, so when the path's next edge
+    /// is longer (search steps, connections, shortcuts and rewiring make long straight
+    /// edges) a node this far along it becomes the root instead, and the root moves on past
+    /// nodes the agent already stands on; a goal that changes then finds the agent at most
+    /// this far from where it can turn. 0 = to the next node whatever its distance (the
+    /// paper).
+    pub root_step: f32,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -204,6 +212,7 @@ impl Config {
             connect: false,
             path_shortcuts: 0,
             p_beacon: 0.0,
+            root_step: 0.0,
             profile: Profile::Paper,
         }
     }
@@ -227,7 +236,9 @@ impl Config {
     /// - `p_goal` 0.5: half the samples are the goal while it is not in the tree (the paper
     ///   samples it 30 % of the time);
     /// - `path_shortcuts` 4: the path straightens between its corner nodes (Theta*'s step);
-    /// - `p_beacon` 0.2: a fifth of the samples fall near the path's nodes (its corners).
+    /// - `p_beacon` 0.2: a fifth of the samples fall near the path's nodes (its corners);
+    /// - `root_step` `e_max`: the root (the agent's next waypoint) advances at most `e_max`
+    ///   at a time along the long edges the shortcuts make.
     pub const fn tuned(mut self) -> Self {
         self.clock_every = 256;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
@@ -240,6 +251,7 @@ impl Config {
         self.p_goal = 0.5;
         self.path_shortcuts = 4;
         self.p_beacon = 0.2;
+        self.root_step = self.e_max;
         self.profile = Profile::Tuned;
         self
     }
@@ -365,6 +377,10 @@ impl Config {
             (
                 self.e_search.is_finite() && self.e_search >= 0.0,
                 ConfigError::ESearch,
+            ),
+            (
+                self.root_step.is_finite() && self.root_step >= 0.0,
+                ConfigError::RootStep,
             ),
             (self.steer_candidates >= 1, ConfigError::SteerCandidates),
             (self.sample_attempts >= 1, ConfigError::SampleAttempts),

@@ -67,6 +67,8 @@ error_enum! {
         Sigma => "sigma must be finite and not negative",
         /// `e_search` is NaN, infinite or negative.
         ESearch => "e_search must be finite and not negative",
+        /// `root_step` is NaN, infinite or negative.
+        RootStep => "root_step must be finite and not negative",
         /// `steer_candidates` is zero.
         SteerCandidates => "steer_candidates must be at least 1",
         /// `sample_attempts` is zero.

@@ -648,12 +648,17 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
-    /// Re-roots at the path's next node when the agent has reached the root, and on past nodes
-    /// the agent already stands on (a zero-length edge would hold it for a call), at most
-    /// [`FOLLOW_STEPS`] nodes per call.
+    /// Re-roots at the path's next node when the agent has reached the root; with
+    /// [`Config::root_step`], on past nodes the agent already stands on (a short edge would
+    /// hold it for a call), at most [`FOLLOW_STEPS`] nodes per call.
     fn follow<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) -> bool {
+        let steps = if self.cfg.root_step > 0.0 {
+            FOLLOW_STEPS
+        } else {
+            1
+        };
         let mut advanced = false;
-        for _ in 0..FOLLOW_STEPS {
+        for _ in 0..steps {
             if !self.follow_once(agent, meter) {
                 break;
             }
@@ -698,18 +703,18 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         true
     }
 
-    /// Keeps the agent's commitment short: when the edge from the root to the path's next node
-    /// `next` is longer than `e_max` (search steps, connections, shortcuts and rewiring all
-    /// make long straight edges), a node `e_max` along it becomes the next waypoint instead,
-    /// so a goal that changes never finds the agent bound to a root far away. The edge was
-    /// free, so are its parts. Returns the node to re-root at: `next` when the edge is short
-    /// or the arena has no slot to give.
+    /// [`Config::root_step`]: when the edge from the root to the path's next node `next` is
+    /// longer than the step, a node that far along it becomes the next waypoint instead, so
+    /// a goal that changes never finds the agent bound to a root far away. The edge was
+    /// free, so are its parts. Returns the node to re-root at: `next` when the edge is short,
+    /// the step 0, or the arena has no slot to give.
     fn split_long_edge<C: Clock + ?Sized>(&mut self, next: NodeId, meter: &Meter<'_, C>) -> NodeId {
         let Some(root) = self.fwd.tree.root() else {
             return next;
         };
         let (a, b) = (self.fwd.pos(root), self.fwd.pos(next));
-        if a.dist(b) <= self.cfg.e_max {
+        let step = self.cfg.root_step;
+        if step <= 0.0 || a.dist(b) <= step {
             return next;
         }
         let mut keep = [next, self.goal_node().unwrap_or(next)];
