@@ -173,6 +173,11 @@ pub struct Config {
     /// this far from where it can turn. 0 = to the next node whatever its distance (the
     /// paper).
     pub root_step: f32,
+    /// Beacon states ([`Config::p_beacon`]) join whatever the density around them (`n_max`,
+    /// `n_max_informed`): the path's corners, where a node can still shorten it, keep
+    /// densifying until the arena is full and then by trades (`recycle_when_full`). Off:
+    /// beacon states obey the density rule like any other sample.
+    pub dense_beacons: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -213,6 +218,7 @@ impl Config {
             path_shortcuts: 0,
             p_beacon: 0.0,
             root_step: 0.0,
+            dense_beacons: false,
             profile: Profile::Paper,
         }
     }

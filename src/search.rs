@@ -6,7 +6,8 @@
 //!
 //! - Sampling: [`crate::sample`]; with `p_beacon` (tuned), once the goal is joined, a share of
 //!   the samples falls in the `e_max` disc around a node of the current path instead
-//!   (RRT*-Smart's beacons).
+//!   (RRT*-Smart's beacons); with `dense_beacons` (tuned) such a state joins whatever the
+//!   density around it.
 //! - RRT-Connect's greedy step (`TreeStore::connect`, tuned `connect`): the planner makes
 //!   the other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
@@ -536,7 +537,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         } else {
             cfg.n_max
         };
-        if !(found < n_max as usize || far_sample || is_goal) {
+        let exempt = beacon.is_some() && cfg.dense_beacons;
+        if !(found < n_max as usize || far_sample || is_goal || exempt) {
             if cfg.base == Base::RtRrt {
                 let _ = self.goal_queue.push_back(x_nearest);
             }
