@@ -170,14 +170,23 @@ pub struct Config {
     /// is longer (search steps, connections, shortcuts and rewiring make long straight
     /// edges) a node this far along it becomes the root instead, and the root moves on past
     /// nodes the agent already stands on; a goal that changes then finds the agent at most
-    /// this far from where it can turn. 0 = to the next node whatever its distance (the
-    /// paper).
+    /// this far from where it can turn. With a step, the root also moves only along a path
+    /// to the goal (not towards the node nearest a goal not yet joined), and with
+    /// `path_shortcuts` the node after the next one is first offered the root as parent. 0 =
+    /// to the next node whatever its distance, also while searching (the paper).
     pub root_step: f32,
     /// Beacon states ([`Config::p_beacon`]) join whatever the density around them (`n_max`,
     /// `n_max_informed`): the path's corners, where a node can still shorten it, keep
     /// densifying until the arena is full and then by trades (`recycle_when_full`). Off:
     /// beacon states obey the density rule like any other sample.
     pub dense_beacons: bool,
+    /// Once the goal is in the tree, a state the density rule turns away inside the informed
+    /// ellipse takes the slot of the neighbourhood's worst leaf (the highest `Cost(x) +
+    /// d_E(x, goal)`) when that is above the cost bound of the new state: the node count stays,
+    /// the nodes move to where they can shorten the path (the sum of the bounds of a
+    /// neighbourhood only decreases, so this never cycles). Off: a dense neighbourhood takes
+    /// no new state (the paper).
+    pub density_trades: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -219,6 +228,7 @@ impl Config {
             p_beacon: 0.0,
             root_step: 0.0,
             dense_beacons: false,
+            density_trades: false,
             profile: Profile::Paper,
         }
     }
@@ -244,7 +254,10 @@ impl Config {
     /// - `path_shortcuts` 4: the path straightens between its corner nodes (Theta*'s step);
     /// - `p_beacon` 0.2: a fifth of the samples fall near the path's nodes (its corners);
     /// - `root_step` `e_max`: the root (the agent's next waypoint) advances at most `e_max`
-    ///   at a time along the long edges the shortcuts make.
+    ///   at a time along the long edges the shortcuts make, only along a path to the goal,
+    ///   and takes the path's node after next as child first when that is shorter;
+    /// - `density_trades`: a dense neighbourhood inside the ellipse trades its worst leaf for
+    ///   a state that bounds a shorter path, so the tree keeps improving at the density rule.
     pub const fn tuned(mut self) -> Self {
         self.clock_every = 256;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
@@ -258,6 +271,7 @@ impl Config {
         self.path_shortcuts = 4;
         self.p_beacon = 0.2;
         self.root_step = self.e_max;
+        self.density_trades = true;
         self.profile = Profile::Tuned;
         self
     }

@@ -673,22 +673,37 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if agent.dist(root) > self.cfg.e_max / 10.0 {
             return false;
         }
+        // With a root step (tuned), the root moves only along a path to the goal: towards
+        // the node nearest a goal not yet joined it could take the agent the wrong way just
+        // before the goal joins (a search takes tens of microseconds).
+        if self.cfg.root_step > 0.0 && self.goal_node().is_none() {
+            return false;
+        }
         let Some(end) = self.path_end(meter) else {
             return false;
         };
-        // The node after the root on the path to `end`: walk up from `end`.
+        // The node after the root on the path to `end`, and the one after it: walk up from
+        // `end`.
         let tree = &self.fwd.tree;
-        let mut next = end;
+        let (mut next, mut after) = (end, None);
         for _ in 0..tree.len() {
             match tree.parent(next) {
                 Some(p) if Some(p) == tree.root() => break,
-                Some(p) => next = p,
+                Some(p) => (next, after) = (p, Some(next)),
                 None => return false,
             }
         }
         if tree.parent(next) != tree.root() || tree.edge_blocked(next) != Some(false) {
             return false;
         }
+        // With path shortcuts (tuned), the root is offered as parent to the node after
+        // `next` first: the agent is about to commit to the path's first edge, which the
+        // anytime shortcuts may not have reached yet (a goal that joins in a call leaves its
+        // first edges as the search made them).
+        let next = match after {
+            Some(n2) if self.cfg.path_shortcuts > 0 && self.shortcut_from_root(n2, meter) => n2,
+            _ => next,
+        };
         let next = self.split_long_edge(next, meter);
         // The agent is near the root, not always on it: it must see the next node in a
         // straight free line, or it first finishes its way to the root.
@@ -701,6 +716,31 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         self.fwd.restart_sweeps();
         true
+    }
+
+    /// Makes `node` a child of the root when the segment is free and that shortens its path
+    /// (a Theta* shortcut at the root). Whether it did.
+    fn shortcut_from_root<C: Clock + ?Sized>(
+        &mut self,
+        node: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> bool {
+        let Some(root) = self.fwd.tree.root() else {
+            return false;
+        };
+        let (a, b) = (self.fwd.pos(root), self.fwd.pos(node));
+        let via = self.fwd.cost(root).extend(a.dist(b), false);
+        meter.charge(4);
+        if via >= self.fwd.cost(node) || !self.map.free_path(a, b) {
+            return false;
+        }
+        match self.fwd.tree.set_parent(node, root, false) {
+            Ok(moved) => {
+                meter.charge(units(moved));
+                true
+            }
+            Err(_) => false,
+        }
     }
 
     /// [`Config::root_step`]: when the edge from the root to the path's next node `next` is
@@ -729,10 +769,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let Some(root) = self.fwd.tree.root() else {
             return next;
         };
-        let Ok(mid) = self
-            .fwd
-            .insert(a.step_towards(b, self.cfg.e_max), root, false)
-        else {
+        let Ok(mid) = self.fwd.insert(a.step_towards(b, step), root, false) else {
             return next;
         };
         match self.fwd.tree.set_parent(next, mid, false) {

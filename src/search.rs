@@ -6,8 +6,8 @@
 //!
 //! - Sampling: [`crate::sample`]; with `p_beacon` (tuned), once the goal is joined, a share of
 //!   the samples falls in the `e_max` disc around a node of the current path instead
-//!   (RRT*-Smart's beacons); with `dense_beacons` (tuned) such a state joins whatever the
-//!   density around it.
+//!   (RRT*-Smart's beacons); with `dense_beacons` (off in both named sets) such a state
+//!   joins whatever the density around it.
 //! - RRT-Connect's greedy step (`TreeStore::connect`, tuned `connect`): the planner makes
 //!   the other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
@@ -25,7 +25,11 @@
 //! - The node is added when the neighbourhood holds fewer than `n_max` nodes, or the sample was
 //!   farther than `e_max` from its nearest node, or the new state is the goal. With
 //!   `rewire_new` (tuned), a node added inside the informed ellipse then offers itself as
-//!   parent to its neighbours, as RRT* does.
+//!   parent to its neighbours, as RRT* does. With `density_trades` (tuned), a state the
+//!   rule turns away inside the ellipse instead takes the slot of the neighbourhood's leaf
+//!   with the highest `Cost(x) + d_E(x, goal)` when that is above the new state's own bound:
+//!   the nodes move to where they can shorten the path, and since a neighbourhood's bounds
+//!   only decrease, trades cannot cycle.
 //! - The goal joins below the cheapest node within `e_max` that sees it over a free segment,
 //!   tried whenever a new node lands within `e_max` of it *and* whenever an expansion adds no
 //!   node (a duplicate sample, a dense neighbourhood), so neither the duplicate test nor the
@@ -538,7 +542,17 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             cfg.n_max
         };
         let exempt = beacon.is_some() && cfg.dense_beacons;
-        if !(found < n_max as usize || far_sample || is_goal || exempt) {
+        let dense = !(found < n_max as usize || far_sample || is_goal || exempt);
+        // A dense neighbourhood inside the ellipse may still trade (tuned): its worst leaf
+        // for a state that bounds a shorter path.
+        let swap = match (&view, target.as_deref()) {
+            (Some(v), Some(t)) if dense && informed && cfg.density_trades => {
+                let cover = self.cover(cfg.recycle_cover);
+                self.worst_leaf(&near, x_new, v.goal, t.node, cover, meter)
+            }
+            _ => None,
+        };
+        if dense && swap.is_none() {
             if cfg.base == Base::RtRrt {
                 let _ = self.goal_queue.push_back(x_nearest);
             }
@@ -547,6 +561,30 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // Keep x_nearest a candidate even when the list was truncated.
         keep_candidate(&mut near, x_nearest);
         let parent = self.best_parent(env, x_new, &mut near, meter)?;
+        if let (Some((score, victim)), Some(v), Some(t)) = (swap, &view, target.as_deref()) {
+            let bound = self
+                .cost(parent)
+                .extend(self.pos(parent).dist(x_new) + x_new.dist(v.goal), false);
+            if bound >= score || victim == parent {
+                return None;
+            }
+            let mut keep = [parent, t.node.unwrap_or(parent)];
+            if !self.remove_leaf_renaming(victim, &mut keep) {
+                return None;
+            }
+            let target = target?;
+            if target.node.is_some() {
+                target.node = Some(keep[1]);
+            }
+            let id = self.insert(x_new, keep[0], false).ok()?;
+            if cfg.rewire_new {
+                for &nb in near.iter() {
+                    meter.charge(1);
+                    self.try_rewire(env, id, nb, meter);
+                }
+            }
+            return Some((id, false));
+        }
         // A full tree may trade a leaf for a state that can shorten the path (tuned).
         let trade = (cfg.recycle_when_full && informed).then(|| {
             let goal = view.as_ref().map_or(x_new, |v| v.goal);
@@ -757,6 +795,47 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let Some((_, victim)) = best else {
             return false;
         };
+        self.remove_leaf_renaming(victim, keep)
+    }
+
+    /// The leaf of `near` (not the root, not `goal_node`, not one of the last `cover` nodes of
+    /// its index bucket) with the highest cost bound `Cost(x) + d_E(x, goal)`, with that
+    /// bound, when it is above the best bound `x` could have below any node of `near`
+    /// (`Config::density_trades`).
+    fn worst_leaf<C: Clock + ?Sized>(
+        &self,
+        near: &Near,
+        x: Point,
+        goal: Point,
+        goal_node: Option<NodeId>,
+        cover: u16,
+        meter: &Meter<'_, C>,
+    ) -> Option<(Cost, NodeId)> {
+        meter.charge(units(near.len()).saturating_add(2));
+        let mut lowest: Option<Cost> = None;
+        let mut worst: Option<(Cost, NodeId)> = None;
+        for &id in near.iter() {
+            let p = self.pos(id);
+            let c = self.cost(id);
+            let via = c.extend(p.dist(x) + x.dist(goal), false);
+            if lowest.is_none_or(|l| via < l) {
+                lowest = Some(via);
+            }
+            if self.tree.is_leaf(id) && self.tree.root() != Some(id) && goal_node != Some(id) {
+                let score = c.extend(p.dist(goal), false);
+                if worst.is_none_or(|(w, _)| score > w)
+                    && (cover == 0 || self.has_company(id, cover, meter))
+                {
+                    worst = Some((score, id));
+                }
+            }
+        }
+        worst.filter(|&(w, _)| lowest.is_some_and(|l| w > l))
+    }
+
+    /// Removes leaf `victim` from the arena and the index; an id of `keep` naming the node
+    /// that moved into its slot is renamed, and so are the sweeps'. Whether it was removed.
+    fn remove_leaf_renaming(&mut self, victim: NodeId, keep: &mut [NodeId]) -> bool {
         let _ = self.index.remove(victim, self.pos(victim));
         match self.tree.remove_leaf(victim) {
             Ok(moved) => {

@@ -94,6 +94,7 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "recycle_cover" => cfg.recycle_cover = v.parse()?,
         "root_step" => cfg.root_step = v.parse()?,
         "dense_beacons" => cfg.dense_beacons = v.parse()?,
+        "density_trades" => cfg.density_trades = v.parse()?,
         _ => return Err(anyhow!("unknown field {field:?}")),
     }
     Ok(())
