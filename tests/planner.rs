@@ -791,51 +791,64 @@ fn regression_a_new_goal_finds_the_agent_bound_to_a_far_root() {
     );
 }
 
+/// A planner on the built-in bug trap (seed 3) after 60 calls of 20 ms towards its first goal,
+/// its tree checked, handed to `f`.
+fn grown_towards_goal_1<T>(
+    cfg: Config,
+    f: impl FnOnce(&Planner<'_, '_, DiffusionTable<'_>, XorShiftRng, N, B, K>) -> T,
+) -> T {
+    let s = &builtin::BUG_TRAP;
+    let table = landmark_table(&s.grid, 8);
+    let mut storage = Box::new(Storage::<N, B>::new());
+    let mut p = planner_on(
+        &mut storage,
+        s,
+        DiffusionTable::new(&table).unwrap(),
+        cfg,
+        3,
+    );
+    p.set_goal(s.goals[0]).unwrap();
+    let clock = clock();
+    for _ in 0..60 {
+        p.grow(&clock);
+    }
+    p.tree().validate().unwrap();
+    f(&p)
+}
+
 /// `Config::dense_beacons`: beacon states join whatever the density around them, so the
 /// neighbourhoods of the path's nodes fill past `n_max_informed` and the path keeps
 /// shortening (on the reference bug trap the density rule had held the tuned tree's cost flat
 /// between 0.1 s and 1 s of CPU on legs 1-3).
 #[test]
 fn dense_beacons_densify_the_path_past_the_density_rule() {
-    let s = &builtin::BUG_TRAP;
-    let table = landmark_table(&s.grid, 8);
     let mut densest = Vec::new();
     for dense in [true, false] {
         let mut cfg = Config::bi_am_rrt(MetricKind::Diffusion).tuned();
         cfg.dense_beacons = dense;
         cfg.density_trades = false;
-        let mut storage = Box::new(Storage::<N, B>::new());
-        let mut p = planner_on(
-            &mut storage,
-            s,
-            DiffusionTable::new(&table).unwrap(),
-            cfg,
-            3,
-        );
-        p.set_goal(s.goals[0]).unwrap();
-        let clock = clock();
-        for _ in 0..60 {
-            p.grow(&clock);
-        }
-        p.tree().validate().unwrap();
-        let mut path = vec![Point::ZERO; N];
-        let info = p.path(&mut path).unwrap();
-        assert!(info.to_goal && !info.blocked);
-        let radius = cfg.e_max;
-        let most = path[..info.len]
-            .iter()
-            .map(|q| {
-                p.tree()
-                    .positions()
-                    .iter()
-                    .filter(|x| x.dist(*q) <= radius)
-                    .count()
-            })
-            .max()
-            .unwrap();
-        let cost = p.tree().cost(p.goal_node().unwrap()).unwrap().length;
-        eprintln!("dense_beacons {dense}: {most} nodes near a path node at most, path {cost} m");
-        densest.push((most, cost));
+        grown_towards_goal_1(cfg, |p| {
+            let mut path = vec![Point::ZERO; N];
+            let info = p.path(&mut path).unwrap();
+            assert!(info.to_goal && !info.blocked);
+            let radius = cfg.e_max;
+            let most = path[..info.len]
+                .iter()
+                .map(|q| {
+                    p.tree()
+                        .positions()
+                        .iter()
+                        .filter(|x| x.dist(*q) <= radius)
+                        .count()
+                })
+                .max()
+                .unwrap();
+            let cost = p.tree().cost(p.goal_node().unwrap()).unwrap().length;
+            eprintln!(
+                "dense_beacons {dense}: {most} nodes near a path node at most, path {cost} m"
+            );
+            densest.push((most, cost));
+        });
     }
     // Measured (seed 3, 60 calls of 20 ms): 419 nodes within e_max of a path node and a
     // 74.88 m path with dense beacons, 128 and 75.57 m without (the goal's optimum: 74.4 m).
@@ -894,34 +907,20 @@ fn regression_the_root_moves_before_the_goal_joins() {
 /// CPU). Here the 2,048-node arena fills either way.
 #[test]
 fn density_trades_shorten_the_path() {
-    let s = &builtin::BUG_TRAP;
-    let table = landmark_table(&s.grid, 8);
     let mut runs = Vec::new();
     for trades in [true, false] {
         let mut cfg = Config::bi_am_rrt(MetricKind::Diffusion).tuned();
         cfg.density_trades = trades;
-        let mut storage = Box::new(Storage::<N, B>::new());
-        let mut p = planner_on(
-            &mut storage,
-            s,
-            DiffusionTable::new(&table).unwrap(),
-            cfg,
-            3,
-        );
-        p.set_goal(s.goals[0]).unwrap();
-        let clock = clock();
-        for _ in 0..60 {
-            p.grow(&clock);
-        }
-        p.tree().validate().unwrap();
-        let cost = p.tree().cost(p.goal_node().unwrap()).unwrap();
-        assert!(!cost.blocked);
-        eprintln!(
-            "density_trades {trades}: path {} m, {} nodes",
-            cost.length,
-            p.tree().len()
-        );
-        runs.push((cost.length, p.tree().len()));
+        grown_towards_goal_1(cfg, |p| {
+            let cost = p.tree().cost(p.goal_node().unwrap()).unwrap();
+            assert!(!cost.blocked);
+            eprintln!(
+                "density_trades {trades}: path {} m, {} nodes",
+                cost.length,
+                p.tree().len()
+            );
+            runs.push((cost.length, p.tree().len()));
+        });
     }
     // Measured (seed 3, 60 calls of 20 ms): 75.21 m with trades, 75.57 m without (the
     // goal's optimum: 74.4 m).
