@@ -719,7 +719,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// Makes `node` a child of the root when the segment is free and that shortens its path
-    /// (a Theta* shortcut at the root). Whether it did.
+    /// (a Theta* shortcut at the root, by the rewiring step). Whether it did.
     fn shortcut_from_root<C: Clock + ?Sized>(
         &mut self,
         node: NodeId,
@@ -728,19 +728,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let Some(root) = self.fwd.tree.root() else {
             return false;
         };
-        let (a, b) = (self.fwd.pos(root), self.fwd.pos(node));
-        let via = self.fwd.cost(root).extend(a.dist(b), false);
-        meter.charge(4);
-        if via >= self.fwd.cost(node) || !self.map.free_path(a, b) {
-            return false;
-        }
-        match self.fwd.tree.set_parent(node, root, false) {
-            Ok(moved) => {
-                meter.charge(units(moved));
-                true
-            }
-            Err(_) => false,
-        }
+        let env = Env {
+            map: &self.map,
+            metric: &self.metric,
+            cfg: &self.cfg,
+            call: self.call,
+        };
+        self.fwd.try_rewire(&env, root, node, meter)
     }
 
     /// [`Config::root_step`]: when the edge from the root to the path's next node `next` is

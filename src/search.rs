@@ -561,41 +561,35 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // Keep x_nearest a candidate even when the list was truncated.
         keep_candidate(&mut near, x_nearest);
         let parent = self.best_parent(env, x_new, &mut near, meter)?;
-        if let (Some((score, victim)), Some(v), Some(t)) = (swap, &view, target.as_deref()) {
-            let bound = self
-                .cost(parent)
-                .extend(self.pos(parent).dist(x_new) + x_new.dist(v.goal), false);
-            if bound >= score || victim == parent {
-                return None;
-            }
-            let mut keep = [parent, t.node.unwrap_or(parent)];
-            if !self.remove_leaf_renaming(victim, &mut keep) {
-                return None;
-            }
-            let target = target?;
-            if target.node.is_some() {
-                target.node = Some(keep[1]);
-            }
-            let id = self.insert(x_new, keep[0], false).ok()?;
-            if cfg.rewire_new {
-                for &nb in near.iter() {
-                    meter.charge(1);
-                    self.try_rewire(env, id, nb, meter);
+        // The new state's cost bound below `parent`: a lower bound of a path through it.
+        let bound = |s: &Self, goal: Point| {
+            s.cost(parent)
+                .extend(s.pos(parent).dist(x_new) + x_new.dist(goal), false)
+        };
+        let id = match (swap, &view, target) {
+            // A dense neighbourhood's trade: the worst leaf's slot, if the state does better.
+            (Some((score, victim)), Some(v), Some(t)) => {
+                if bound(self, v.goal) >= score || victim == parent {
+                    return None;
                 }
+                let mut keep = [parent, t.node.unwrap_or(parent)];
+                if !self.remove_leaf_renaming(victim, &mut keep) {
+                    return None;
+                }
+                if t.node.is_some() {
+                    t.node = Some(keep[1]);
+                }
+                self.insert(x_new, keep[0], false).ok()?
             }
-            return Some((id, false));
-        }
-        // A full tree may trade a leaf for a state that can shorten the path (tuned).
-        let trade = (cfg.recycle_when_full && informed).then(|| {
-            let goal = view.as_ref().map_or(x_new, |v| v.goal);
-            Trade {
-                bound: self
-                    .cost(parent)
-                    .extend(self.pos(parent).dist(x_new) + x_new.dist(goal), false),
-                cover: cfg.recycle_cover,
+            // A full tree may trade a leaf for a state that can shorten the path (tuned).
+            (_, _, target) => {
+                let trade = (cfg.recycle_when_full && informed).then(|| Trade {
+                    bound: bound(self, view.as_ref().map_or(x_new, |v| v.goal)),
+                    cover: cfg.recycle_cover,
+                });
+                self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?
             }
-        });
-        let id = self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?;
+        };
         // RRT*'s rewiring around the new node: each neighbour takes it as parent when that is
         // cheaper over a free segment (tuned configurations, inside the informed ellipse). A
         // trade may have renamed one of `near`'s ids; `try_rewire` checks cost and segment of
