@@ -187,6 +187,12 @@ pub struct Config {
     /// neighbourhood only decreases, so this never cycles). Off: a dense neighbourhood takes
     /// no new state (the paper).
     pub density_trades: bool,
+    /// Steering candidates are spread evenly in angle around the node ([`crate::geometry::DiscFan`]:
+    /// a random first direction, then equal turns, each at a random radius) instead of drawn
+    /// independently in the disc: every direction is covered by fewer candidates, and one
+    /// sine-cosine serves the whole batch. Off: independent uniform draws (the paper's stochastic
+    /// steering as the reference implements it).
+    pub steer_fan: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -229,6 +235,7 @@ impl Config {
             root_step: 0.0,
             dense_beacons: false,
             density_trades: false,
+            steer_fan: false,
             profile: Profile::Paper,
         }
     }

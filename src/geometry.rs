@@ -153,6 +153,43 @@ pub fn sample_unit_disc<R: Rng + ?Sized>(rng: &mut R) -> Point {
     Point::new(r * cos, r * sin)
 }
 
+/// `n` states in the disc of radius `radius` around `center`, spread evenly in angle: a
+/// uniform random first direction, then equal turns of `2 pi / n`, each at a radius drawn with
+/// the square-root law. Each state alone is uniform in the disc (as [`sample_disc`]), and
+/// together they cover every direction, so fewer of them find the way around an obstacle; one
+/// sine-cosine for the whole fan instead of one per state.
+#[derive(Clone, Copy, Debug)]
+pub struct DiscFan {
+    center: Point,
+    radius: f32,
+    dir: Point,
+    turn: Point,
+}
+
+impl DiscFan {
+    /// A fan of `n` (at least 1) states around `center`; draws the first direction.
+    pub fn new<R: Rng + ?Sized>(rng: &mut R, center: Point, radius: f32, n: u16) -> Self {
+        let theta = unit_f32(rng) * core::f32::consts::TAU;
+        let (sin, cos) = libm::sincosf(theta);
+        let (turn_sin, turn_cos) = libm::sincosf(core::f32::consts::TAU / f32::from(n.max(1)));
+        Self {
+            center,
+            radius,
+            dir: Point::new(cos, sin),
+            turn: Point::new(turn_cos, turn_sin),
+        }
+    }
+
+    /// The next state of the fan (its radius drawn now).
+    pub fn next_state<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Point {
+        let r = libm::sqrtf(unit_f32(rng)) * self.radius;
+        let p = self.center + self.dir * r;
+        let (d, t) = (self.dir, self.turn);
+        self.dir = Point::new(d.x * t.x - d.y * t.y, d.x * t.y + d.y * t.x);
+        p
+    }
+}
+
 /// The informed ellipse: all points whose summed distance to two foci is at most `c_best`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -269,6 +306,41 @@ mod tests {
         }
         // Uniform in area: a quarter of the samples within half the radius.
         assert!((4_500..5_500).contains(&inner), "{inner}");
+    }
+
+    #[test]
+    fn a_fan_covers_every_direction_and_each_state_is_uniform() {
+        let mut rng = XorShiftRng::seed_from_u64(9);
+        let c = Point::new(3.0, -2.0);
+        let (mut inner, mut sector) = (0, [0u32; 8]);
+        for _ in 0..2_000 {
+            let mut fan = DiscFan::new(&mut rng, c, 2.0, 16);
+            let mut angles = [0.0f32; 16];
+            for a in angles.iter_mut() {
+                let p = fan.next_state(&mut rng);
+                let d = p.dist(c);
+                assert!(d <= 2.0 + 1e-5);
+                if d < 1.0 {
+                    inner += 1;
+                }
+                *a = libm::atan2f(p.y - c.y, p.x - c.x);
+                let s = ((*a + core::f32::consts::PI) / core::f32::consts::TAU * 8.0) as usize;
+                sector[s.min(7)] += 1;
+            }
+            // Successive states turn by 2 pi / 16 (the equal turns of the fan).
+            for w in angles.windows(2) {
+                let turn = (w[1] - w[0]).rem_euclid(core::f32::consts::TAU);
+                assert!(
+                    (turn - core::f32::consts::TAU / 16.0).abs() < 1e-3,
+                    "{turn}"
+                );
+            }
+        }
+        // Uniform in area and in angle over many fans.
+        assert!((7_200..8_800).contains(&inner), "{inner}");
+        for n in sector {
+            assert!((3_700..4_300).contains(&n), "{sector:?}");
+        }
     }
 
     #[test]

@@ -157,9 +157,23 @@ impl<'a> OccupancyGrid<'a> {
         )
     }
 
-    /// Whether `p` lies in the map and no occupied cell is within the contact margin of it.
+    /// Whether `p` lies in the map and no occupied cell is within the contact margin of it:
+    /// the cells of the degenerate segment `p-p` (one, or up to four near a cell's edge), tested
+    /// without the segment traversal (the steering tests a point per candidate).
     pub fn point_free(&self, p: Point) -> bool {
-        self.segment_free(p, p)
+        const M: f32 = CONTACT_MARGIN;
+        if !self.contains(p) {
+            return false;
+        }
+        let (x, y) = (p.x * self.inv_cell, p.y * self.inv_cell);
+        let (max_row, max_col) = (
+            u32::from(self.height).saturating_sub(1),
+            u32::from(self.width).saturating_sub(1),
+        );
+        let index = |v: f32, max: u32| to_u16(sat_u32(v).min(max));
+        let (c0, c1) = (index(x - M, max_col), index(x + M, max_col));
+        let (r0, r1) = (index(y - M, max_row), index(y + M, max_row));
+        (r0..=r1).all(|row| self.span_free(row, c0, c1))
     }
 
     /// Whether segment `a-b` lies in the map and touches no occupied cell (module docs).
@@ -462,7 +476,7 @@ impl<'a, const K: usize> Map<'a, K> {
 
     /// Whether a single position is free (the degenerate segment `p-p`).
     pub fn free_point(&self, p: Point) -> bool {
-        self.free_path(p, p)
+        self.grid.point_free(p) && !self.obstacles.blocks_segment(p, p)
     }
 
     /// Validates a position given at the API edge: finite, inside the map, not in an obstacle.

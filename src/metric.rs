@@ -584,31 +584,32 @@ impl DiffusionTable<'_> {
 /// coordinate order: the same sum, bit for bit, as reading element by element.
 #[inline]
 fn stored_sq(kind: ElementKind, a: &[u8], b: &[u8]) -> Option<f32> {
+    // No early exit in the loop: the sentinel is or-ed into a flag, so the conversions and
+    // products pipeline (the sum itself stays sequential, the same bits as element by element).
     let mut sum = 0.0f32;
+    let mut unreachable = false;
     match kind {
         ElementKind::I16 => {
-            for (x, y) in a.chunks_exact(2).zip(b.chunks_exact(2)) {
-                let x = i16::from_le_bytes(x.try_into().ok()?);
-                let y = i16::from_le_bytes(y.try_into().ok()?);
-                if x == i16::MIN || y == i16::MIN {
-                    return None;
-                }
+            let (a, _) = a.as_chunks::<2>();
+            let (b, _) = b.as_chunks::<2>();
+            for (&x, &y) in a.iter().zip(b) {
+                let (x, y) = (i16::from_le_bytes(x), i16::from_le_bytes(y));
+                unreachable |= (x == i16::MIN) | (y == i16::MIN);
                 let (x, y) = (x as f32, y as f32);
                 sum += (x - y) * (x - y);
             }
         }
         ElementKind::F32 => {
-            for (x, y) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-                let x = f32::from_le_bytes(x.try_into().ok()?);
-                let y = f32::from_le_bytes(y.try_into().ok()?);
-                if x.is_nan() || y.is_nan() {
-                    return None;
-                }
+            let (a, _) = a.as_chunks::<4>();
+            let (b, _) = b.as_chunks::<4>();
+            for (&x, &y) in a.iter().zip(b) {
+                let (x, y) = (f32::from_le_bytes(x), f32::from_le_bytes(y));
+                unreachable |= x.is_nan() | y.is_nan();
                 sum += (x - y) * (x - y);
             }
         }
     }
-    Some(sum)
+    (!unreachable).then_some(sum)
 }
 
 impl DiffusionTable<'_> {
@@ -659,7 +660,10 @@ impl Metric for DiffusionTable<'_> {
             Some(u32::MAX) => return f32::INFINITY,
             Some(k) => k as usize,
         };
-        match self.placed(a) {
+        // `cell`, not `placed`: `cb` has coordinates (`prepare` placed it), so an entry `a`
+        // without them is a different entry, and `entry_distance` reads its sentinel as
+        // infinite: the same answer without a separate look at the first coordinate.
+        match self.cell(a) {
             Some(ca) => self.entry_distance(ca, cb),
             None => f32::INFINITY,
         }

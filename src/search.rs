@@ -44,7 +44,7 @@
 use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config};
 use crate::error::TreeError;
-use crate::geometry::{Ellipse, Point, sample_disc, unit_f32};
+use crate::geometry::{DiscFan, Ellipse, Point, sample_disc, unit_f32};
 use crate::index::SpatialIndex;
 use crate::map::Map;
 use crate::metric::{Metric, Prepared};
@@ -350,12 +350,19 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let to = env.metric.prepare(x);
         let mut best: Option<(Point, f32)> = None;
         let mut left = env.cfg.steer_candidates;
+        let mut fan = env
+            .cfg
+            .steer_fan
+            .then(|| DiscFan::new(rng, a, radius, env.cfg.steer_candidates));
         while left > 0 {
             let n = left.min(STEER_BATCH_U16);
             left = left.saturating_sub(n);
             let mut batch = heapless::Vec::<(f32, Point), STEER_BATCH>::new();
             for _ in 0..n {
-                let c = sample_disc(rng, a, radius);
+                let c = match fan.as_mut() {
+                    Some(f) => f.next_state(rng),
+                    None => sample_disc(rng, a, radius),
+                };
                 meter.charge(2);
                 if !env.map.free_point(c) {
                     continue;

@@ -204,3 +204,48 @@ fn corner_cases() {
     assert!(g.segment_free(p(39.5, 1.5), p(38.1, 1.5)));
     assert!(g.segment_free(p(0.5, 0.5), p(39.5, 0.5)));
 }
+
+/// `point_free` has its own fast path: it must answer exactly as the degenerate segment `p-p`
+/// does, on random points and on points on and a margin's width around cell edges and corners,
+/// at several cell sizes.
+#[test]
+fn point_free_is_the_degenerate_segment() {
+    let p = Point::new;
+    let mut rng = XorShiftRng::seed_from_u64(7);
+    for cell in [1.0f32, 0.5, 0.05, 3.0] {
+        let (w, h) = (23u16, 17u16);
+        let mut bits = vec![0u8; OccupancyGrid::bytes_needed(w, h)];
+        pack_grid(&mut bits, w, h, |_, _| unit(&mut rng) < 0.3).unwrap();
+        let g = OccupancyGrid::new(&bits, w, h, cell).unwrap();
+        let mut points = Vec::new();
+        for _ in 0..20_000 {
+            let (x, y) = (unit(&mut rng) * 24.0 - 0.5, unit(&mut rng) * 18.0 - 0.5);
+            points.push(p(x as f32 * cell, y as f32 * cell));
+        }
+        let offsets = [
+            0.0f32,
+            CONTACT_MARGIN,
+            -CONTACT_MARGIN,
+            0.5 * CONTACT_MARGIN,
+            1e-6,
+        ];
+        for c in 0..=w {
+            for r in 0..=h {
+                for dx in offsets {
+                    for dy in offsets {
+                        points.push(p((c as f32 + dx) * cell, (r as f32 + dy) * cell));
+                    }
+                }
+            }
+        }
+        points.push(p(f32::NAN, 1.0));
+        points.push(p(1.0, f32::INFINITY));
+        for q in points {
+            assert_eq!(
+                g.point_free(q),
+                g.segment_free(q, q),
+                "{q:?} at cell {cell}"
+            );
+        }
+    }
+}

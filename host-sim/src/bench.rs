@@ -95,6 +95,7 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "root_step" => cfg.root_step = v.parse()?,
         "dense_beacons" => cfg.dense_beacons = v.parse()?,
         "density_trades" => cfg.density_trades = v.parse()?,
+        "steer_fan" => cfg.steer_fan = v.parse()?,
         _ => return Err(anyhow!("unknown field {field:?}")),
     }
     Ok(())

@@ -175,12 +175,17 @@ fn run_with<M: Metric>(
         cfg.path_shortcuts = 4;
         cfg.p_beacon = 0.2;
     }
-    // A second byte: dense beacons, density trades, and the root's step: off (the paper) or from 5 % of
+    // A second byte: dense beacons, density trades, fan steering and its candidate count, and the root's step: off (the paper) or from 5 % of
     // e_max (a root within e_max / 10 of the agent, so `follow` steps past several nodes in
     // one call) to 1.05 e_max.
     let more = b.u8();
     cfg.dense_beacons = more & 2 != 0;
     cfg.density_trades = more & 4 != 0;
+    cfg.steer_fan = more & 8 != 0;
+    if more & 16 != 0 {
+        // Few candidates: a fan of one, or a batch split unevenly.
+        cfg.steer_candidates = 1 + (more >> 5) as u16 * 7;
+    }
     if more & 1 != 0 {
         cfg.root_step = cfg.e_max * (0.05 + b.unit());
     }
