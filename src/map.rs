@@ -256,6 +256,7 @@ impl<'a> OccupancyGrid<'a> {
     }
 
     /// Whether cells `c0..=c1` of `row` are all free (a bit-range test, a byte at a time).
+    #[inline]
     fn span_free(&self, row: u16, c0: u16, c1: u16) -> bool {
         let (i0, i1) = (
             cell_index(c0, row, self.width),
@@ -264,15 +265,18 @@ impl<'a> OccupancyGrid<'a> {
         let (b0, b1) = (i0 / 8, i1 / 8);
         let lo_mask = 0xffu8 << (i0 % 8);
         let hi_mask = 0xffu8 >> ((i1 % 8) ^ 7); // 7 - i1 % 8
+        if b0 == b1 {
+            // The common case on a steep segment: one or two cells of one byte.
+            return self.bits.get(b0).is_some_and(|b| b & lo_mask & hi_mask == 0);
+        }
         let Some(bytes) = self.bits.get(b0..=b1) else {
             return false;
         };
         match bytes {
-            [one] => one & lo_mask & hi_mask == 0,
             [first, middle @ .., last] => {
                 first & lo_mask == 0 && last & hi_mask == 0 && middle.iter().all(|&b| b == 0)
             }
-            [] => false,
+            _ => false,
         }
     }
 }
