@@ -267,7 +267,10 @@ impl<'a> OccupancyGrid<'a> {
         let hi_mask = 0xffu8 >> ((i1 % 8) ^ 7); // 7 - i1 % 8
         if b0 == b1 {
             // The common case on a steep segment: one or two cells of one byte.
-            return self.bits.get(b0).is_some_and(|b| b & lo_mask & hi_mask == 0);
+            return self
+                .bits
+                .get(b0)
+                .is_some_and(|b| b & lo_mask & hi_mask == 0);
         }
         let Some(bytes) = self.bits.get(b0..=b1) else {
             return false;

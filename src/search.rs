@@ -16,7 +16,8 @@
 //! - Steering: a step of at most `e_max` along the segment when it is free (`e_search` instead
 //!   while the tree's goal is not in it, when a tuned configuration sets it). Otherwise AM-RRT*
 //!   with a non-Euclidean metric draws `steer_candidates` states in the disc of radius
-//!   `min(e_max, d_E)` around the nearest node and keeps the free one closest to the sample by
+//!   `min(e_max, d_E)` around the nearest node (independently, or with `steer_fan` (tuned)
+//!   spread evenly in angle, [`crate::geometry::DiscFan`]) and keeps the free one closest to the sample by
 //!   the metric (a fixed number of candidates instead of the reference's fixed 2 ms, so a fast
 //!   implementation does not pay milliseconds per sample; candidates are ranked by the metric
 //!   and their segments tested in that order, which picks the same one with fewer segment
