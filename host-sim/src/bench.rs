@@ -39,7 +39,7 @@ pub struct Variant {
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
 /// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`, `e_max`,
 /// `n_max`, `n_max_informed`, `clock_every`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`, `rewire_new`, `connect`, `path_shortcuts`, `p_beacon`,
-/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
+/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `density_trades`, `steer_fan`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
 /// one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
     spec.split(',')
