@@ -119,6 +119,8 @@ pub struct BenchArgs {
     pub out: PathBuf,
     /// Diffusion table layout.
     pub table: crate::diffusion::TableOptions,
+    /// OMPL's RRT-Connect harness (`benches/ompl`), run on every leg beside our planners.
+    pub ompl: Option<PathBuf>,
 }
 
 /// One run: one leg, variant and seed.
@@ -171,6 +173,12 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                 continue;
             }
             let opt = optima[k].ok_or_else(|| anyhow!("{} leg {leg}: goal unreachable", s.name))?;
+            if let Some(bin) = &args.ompl {
+                for row in ompl_leg(bin, &args.out, s, leg, start, goal, opt, args)? {
+                    writeln!(csv, "{}", csv_line(&row))?;
+                    rows.push(row);
+                }
+            }
             for seed in 1..=args.seeds {
                 for v in &args.variants {
                     let r = match args.nodes {
@@ -210,6 +218,93 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
     let md = summary_markdown(&summary, &args.budgets);
     std::fs::write(args.out.join("summary.md"), &md)?;
     print!("{md}");
+    Ok(rows)
+}
+
+/// The planner name of the OMPL rows.
+pub const OMPL_RRT_CONNECT: &str = "OMPL RRT-Connect";
+
+/// Runs OMPL's RRT-Connect (the `benches/ompl` harness at `bin`) on one leg for `args.seeds`
+/// seeds: it reads the grid and the leg from files written to `out`, and answers one CSV row
+/// per seed (first-solution thread CPU time of `solve`, raw path length / optimum).
+#[allow(clippy::too_many_arguments)]
+fn ompl_leg(
+    bin: &std::path::Path,
+    out: &std::path::Path,
+    s: &Scenario,
+    leg: usize,
+    start: bi_am_rrt::Point,
+    goal: bi_am_rrt::Point,
+    opt: f64,
+    args: &BenchArgs,
+) -> Result<Vec<BenchRow>> {
+    let g = &s.map;
+    if f32::from_bits(g.cell_bits) != 1.0 {
+        return Err(anyhow!(
+            "--ompl: {} has cells of {} m; the harness takes 1 m cells",
+            s.name,
+            f32::from_bits(g.cell_bits)
+        ));
+    }
+    let dir = out.join("ompl");
+    std::fs::create_dir_all(&dir)?;
+    std::fs::write(dir.join(format!("{}.grid", s.name)), &g.bits)?;
+    let legs = dir.join("leg.csv");
+    std::fs::write(
+        &legs,
+        format!(
+            "map,leg,sx,sy,gx,gy,optimal_m\n{},{leg},{:?},{:?},{:?},{:?},{opt:?}\n",
+            s.name, start.x, start.y, goal.x, goal.y
+        ),
+    )?;
+    let output = std::process::Command::new(bin)
+        .arg(&legs)
+        .arg(&dir)
+        .arg(args.seeds.to_string())
+        .arg(format!("{}={}x{}", s.name, g.width, g.height))
+        .output()
+        .with_context(|| format!("running {}", bin.display()))?;
+    if !output.status.success() {
+        return Err(anyhow!(
+            "{} failed: {}",
+            bin.display(),
+            String::from_utf8_lossy(&output.stderr)
+        ));
+    }
+    let text = String::from_utf8(output.stdout)?;
+    let mut rows = Vec::new();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let [_, _, seed, us, ratio] = f[..] else {
+            return Err(anyhow!("{}: bad line {line:?}", bin.display()));
+        };
+        let num = |v: &str| -> Result<Option<f64>> {
+            Ok(if v.is_empty() { None } else { Some(v.parse()?) })
+        };
+        rows.push(BenchRow {
+            map: s.name.clone(),
+            leg,
+            planner: OMPL_RRT_CONNECT.to_string(),
+            seed: seed.parse()?,
+            optimal_m: opt,
+            first_us: num(us)?,
+            first_ratio: num(ratio)?,
+            first_nodes: None,
+            cost_ratio: vec![None; args.budgets.len()],
+            nodes: 0,
+            expansions_per_s: 0.0,
+            reads_per_expansion: 0.0,
+            full: false,
+        });
+    }
+    if rows.len() as u64 != args.seeds {
+        return Err(anyhow!(
+            "{}: {} rows for {} seeds",
+            bin.display(),
+            rows.len(),
+            args.seeds
+        ));
+    }
     Ok(rows)
 }
 

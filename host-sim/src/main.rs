@@ -198,6 +198,10 @@ enum Command {
         /// Output folder.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
+        /// Also run OMPL's RRT-Connect on every leg, in the same run: the path of the
+        /// `benches/ompl` harness binary (see its README; needs libompl-dev).
+        #[arg(long)]
+        ompl: Option<PathBuf>,
     },
     /// Soak test: one planner and one agent for a long time with a new random goal every few
     /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
@@ -540,6 +544,7 @@ fn main() -> Result<()> {
             nodes,
             table,
             out,
+            ompl,
         } => {
             if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
                 bail!("--budgets: every budget must be a positive number of seconds");
@@ -556,6 +561,7 @@ fn main() -> Result<()> {
                 nodes,
                 out,
                 table: table.options(),
+                ompl,
             })
             .map(|_| ())
         }

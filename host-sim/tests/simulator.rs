@@ -724,6 +724,7 @@ fn bench_measures_every_leg_variant_and_seed() {
         nodes: 2048,
         out: dir.path().to_path_buf(),
         table: TableOptions::default(),
+        ompl: None,
     })
     .unwrap();
     assert_eq!(rows.len(), legs * 2 * 2);
@@ -742,6 +743,63 @@ fn bench_measures_every_leg_variant_and_seed() {
         assert!(dir.path().join(f).exists(), "{f}");
     }
     assert!(host_sim::bench::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
+}
+
+/// `bench --ompl`: the harness gets each leg's grid and query in files and its CSV rows join
+/// the table under their own planner name (a stand-in script here, so the test needs no OMPL;
+/// a harness that answers the wrong number of rows is an error).
+#[cfg(unix)]
+#[test]
+fn bench_runs_the_ompl_harness_on_every_leg() {
+    use std::os::unix::fs::PermissionsExt as _;
+    let dir = tempfile::tempdir().unwrap();
+    let s = maps::builtin_by_name("open").unwrap();
+    let script = dir.path().join("harness.sh");
+    // Arguments: LEGS.csv GRID_DIR SEEDS MAP=WxH. Answers (after checking that its inputs
+    // exist) seeds 1 and 2 solved in 7 and 9 us at 1.25 x the optimum, seed 3 unsolved.
+    std::fs::write(
+        &script,
+        "#!/bin/sh\nset -e\nname=${4%%=*}\ntest -s \"$2/$name.grid\"\n\
+         leg=$(sed -n 2p \"$1\" | cut -d, -f2)\n\
+         echo map,leg,seed,first_us,first_ratio\n\
+         echo $name,$leg,1,7.0,1.25\necho $name,$leg,2,9.0,1.25\necho $name,$leg,3,,\n",
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let args = |seeds| host_sim::bench::BenchArgs {
+        scenarios: vec![s.clone()],
+        legs: vec![1, 2],
+        variants: host_sim::bench::parse_variants("bi-am-rrt*(e)").unwrap(),
+        seeds,
+        budgets: vec![0.002],
+        nodes: 2048,
+        out: dir.path().join("out"),
+        table: TableOptions::default(),
+        ompl: Some(script.clone()),
+    };
+    let rows = host_sim::bench::run(&args(3)).unwrap();
+    let ompl: Vec<_> = rows
+        .iter()
+        .filter(|r| r.planner == host_sim::bench::OMPL_RRT_CONNECT)
+        .collect();
+    assert_eq!(ompl.len(), 6);
+    for r in &ompl {
+        assert!(r.leg == 1 || r.leg == 2);
+        match r.seed {
+            1 => assert_eq!((r.first_us, r.first_ratio), (Some(7.0), Some(1.25))),
+            2 => assert_eq!(r.first_us, Some(9.0)),
+            _ => assert_eq!((r.first_us, r.first_ratio), (None, None)),
+        }
+    }
+    assert_eq!(rows.len(), 12);
+    // An unsolved seed counts as infinitely slow: the median of 7, 9 and never is 9.
+    let md = std::fs::read_to_string(dir.path().join("out/summary.md")).unwrap();
+    assert!(
+        md.contains("| open | OMPL RRT-Connect | 0/2 | 9 | 1.250 |"),
+        "{md}"
+    );
+    // Four seeds asked, three answered.
+    assert!(host_sim::bench::run(&args(4)).is_err());
 }
 
 /// The soak on a built-in map for a second: goals come and go, every move is checked (a
