@@ -120,6 +120,11 @@ impl Deadline {
         clock.now().saturating_sub(self.start)
     }
 
+    /// The tick at which the budget started (the reading it was set on).
+    pub const fn start(&self) -> u64 {
+        self.start
+    }
+
     /// The tick at which the budget ends.
     pub const fn end(&self) -> u64 {
         self.end
@@ -141,17 +146,38 @@ impl Deadline {
 /// clock costs from a few cycles (a cycle counter) to a system call (a CPU-time clock, about
 /// 0.3 us on Linux), and the planner checks its deadlines 50 to 80 times per expansion; reading
 /// every few hundred units bounds the overrun by that much work instead.
+///
+/// A sparing meter may also *pace* its readings by what they cost ([`Meter::paced`]): it
+/// measures one reading (the first fresh reading of the call against the caller's reading
+/// that set the call's deadline, when no work was charged in between) and the clock's rate
+/// per unit of work (between consecutive readings), and lets the interval grow from
+/// `every` up to `most` units so that a reading costs about 1/[`PACE`] of the work between
+/// two. A CPU-time clock (a system call) is then read every few thousand units; a cycle
+/// counter or a virtual clock, whose readings cost next to nothing, still every `every`.
 #[derive(Debug)]
 pub struct Meter<'c, C: Clock + ?Sized> {
     clock: &'c C,
     pending: Cell<u32>,
     used: Cell<u64>,
     cap: u64,
-    /// Work units between two clock readings of the deadline checks (0: every check).
+    /// Work units between two clock readings of the deadline checks (0: every check); with
+    /// pacing, the fewest.
     every: u32,
+    /// With pacing (above `every`), the most work units between two readings.
+    most: u32,
+    /// The current interval between readings, in work units.
+    pace: Cell<u32>,
+    /// The caller's reading at the start of the call (for the cost of one reading).
+    origin: Cell<Option<u64>>,
+    /// What one reading costs, in ticks (0 while unmeasured).
+    cost: Cell<u64>,
     /// The last reading and the work done when it was taken.
     last: Cell<Option<(u64, u64)>>,
 }
+
+/// A paced meter ([`Meter::paced`]) spaces its readings so that one costs about `1 / PACE` of
+/// the work between two (under 1 %).
+pub const PACE: u64 = 128;
 
 impl<'c, C: Clock + ?Sized> Meter<'c, C> {
     /// A meter over `clock` without a work cap.
@@ -167,6 +193,10 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             used: Cell::new(0),
             cap,
             every: 0,
+            most: 0,
+            pace: Cell::new(0),
+            origin: Cell::new(None),
+            cost: Cell::new(0),
             last: Cell::new(None),
         }
     }
@@ -175,22 +205,61 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
     /// since the last reading (0: at every check).
     pub fn reading_every(mut self, units: u32) -> Self {
         self.every = units;
+        self.pace.set(units);
         self
     }
 
-    /// The clock for a deadline check: the last reading while less than `every` units of work
-    /// have been charged since it, else a fresh one.
+    /// With readings paced by their cost (type docs): at least [`Meter::reading_every`]'s
+    /// units between two readings, at most `most`. `origin` is the reading the caller took
+    /// just before (for the call's deadline): the meter's first reading, if no work was
+    /// charged before it, measures what a reading costs against it. Without a measured cost
+    /// the interval stays at the fewest units.
+    pub fn paced(mut self, most: u32, origin: u64) -> Self {
+        self.most = most;
+        self.origin.set(Some(origin));
+        self
+    }
+
+    /// The clock for a deadline check: the last reading while less than the interval (`every`,
+    /// or the paced one) of work has been charged since it, else a fresh one.
     fn check_now(&self) -> u64 {
         let used = self.used.get();
-        if let Some((t, at)) = self.last.get()
-            && used.saturating_sub(at) < u64::from(self.every)
+        let last = self.last.get();
+        if let Some((t, at)) = last
+            && used.saturating_sub(at) < u64::from(self.pace.get())
         {
             return t;
         }
         self.flush();
         let t = self.clock.now();
+        if self.most > self.every {
+            self.repace(t, used, last);
+        }
         self.last.set(Some((t, used)));
         t
+    }
+
+    /// Pacing (type docs): measures a reading's cost at the first reading, then sets the
+    /// interval from the clock's rate between the last two readings.
+    fn repace(&self, t: u64, used: u64, last: Option<(u64, u64)>) {
+        let Some((t0, at)) = last else {
+            if let Some(origin) = self.origin.take()
+                && used == 0
+            {
+                self.cost.set(t.saturating_sub(origin));
+            }
+            return;
+        };
+        let (dt, du) = (t.saturating_sub(t0), used.saturating_sub(at));
+        // Units whose work takes PACE readings' time: PACE * cost / (dt / du).
+        let units = if dt == 0 {
+            u64::MAX // the clock did not move: readings tell nothing until it does
+        } else {
+            (PACE.saturating_mul(self.cost.get()).saturating_mul(du) / dt).max(1)
+        };
+        let units = if self.cost.get() == 0 { 0 } else { units };
+        let paced = units.clamp(u64::from(self.every), u64::from(self.most));
+        self.pace.set(u32::try_from(paced).unwrap_or(self.most));
     }
 
     /// Records `units` of work.
@@ -392,6 +461,58 @@ mod tests {
         }
         assert_eq!(checks, 500, "the work cap still ends a frozen clock's loop");
         assert_eq!(c.0.get(), 50, "one reading per 100 units");
+    }
+
+    /// A paced meter on a clock whose reading costs 500 ticks and whose work costs 10 ticks
+    /// a unit settles where a reading costs 1/128 of the work between two (u = 128 * 500 *
+    /// u / (10 u + 500): u = 6,350 units); on a clock whose reading costs 1 tick it keeps the
+    /// fewest units, and without a measured cost (work before its first reading) too.
+    #[test]
+    fn a_paced_meter_spaces_its_readings_by_their_cost() {
+        let readings = |step: u64, work_first: bool| {
+            let c = FakeClock::nanos().with_step(step).with_work_cost(10);
+            let origin = c.now();
+            let m = Meter::new(&c).reading_every(256).paced(8192, origin);
+            if work_first {
+                m.charge(1);
+            }
+            let d = Deadline::from_ticks(origin, u64::MAX / 2);
+            let mut at = heapless::Vec::<u64, 512>::new();
+            for _ in 0..100_000 {
+                let before = m.last.get();
+                assert!(!m.expired(&d));
+                if m.last.get() != before {
+                    at.push(m.work()).unwrap();
+                }
+                m.charge(1);
+            }
+            at
+        };
+        let costly = readings(500, false);
+        let gaps: heapless::Vec<u64, 512> = costly.windows(2).map(|w| w[1] - w[0]).collect();
+        assert_eq!(gaps[0], 256, "the fewest units until the rate is known");
+        let settled = &gaps[3..];
+        assert!(
+            settled.iter().all(|&g| (6_300..=6_400).contains(&g)),
+            "{gaps:?}"
+        );
+        let cheap = readings(1, false);
+        assert!(cheap.windows(2).all(|w| w[1] - w[0] == 256), "{cheap:?}");
+        assert_eq!(cheap.len(), 100_000 / 256 + 1);
+        let unmeasured = readings(500, true);
+        assert!(unmeasured.windows(2).all(|w| w[1] - w[0] == 256));
+        // A frozen clock: the cap still ends the loop, and readings are the most apart.
+        let frozen = FakeClock::nanos().with_step(0);
+        let m = Meter::with_cap(&frozen, 50_000)
+            .reading_every(256)
+            .paced(8192, 0);
+        let d = Deadline::from_ticks(0, 10);
+        let mut checks = 0;
+        while !m.expired(&d) {
+            m.charge(1);
+            checks += 1;
+        }
+        assert_eq!(checks, 50_000);
     }
 
     #[test]

@@ -129,6 +129,12 @@ pub struct Config {
     /// [`crate::clock::Meter::reading_every`]); 0 reads the clock at every check (the paper's
     /// implementation). The call then overruns `t_exp` by at most this much work more.
     pub clock_every: u32,
+    /// Above `clock_every`: the readings are paced by what they cost
+    /// ([`crate::clock::Meter::paced`]), at least `clock_every` and at most this many work
+    /// units apart, so that a reading costs under 1 % of the work between two. The call then
+    /// overruns `t_exp` by at most this much work more. 0 (or at most `clock_every`): every
+    /// `clock_every` units (the paper).
+    pub clock_every_max: u32,
     /// Density limit for new states inside the informed ellipse once the goal is in the tree
     /// (where a node can still shorten the path); 0 = `n_max` everywhere (the paper).
     pub n_max_informed: u16,
@@ -224,6 +230,7 @@ impl Config {
             p_goal: 0.7,
             p_uniform: 0.7 / 1.5,
             clock_every: 0,
+            clock_every_max: 0,
             n_max_informed: 0,
             recycle_when_full: false,
             recycle_cover: 0,
@@ -242,9 +249,11 @@ impl Config {
 
     /// The tuned version of a configuration: the same algorithm and switches, with the
     /// engineering changes measured against the paper's parameters (`docs/performance.md`):
-    /// - `clock_every` 1,024: the deadlines read the clock every 1,024 work units (about 12 us
-    ///   on the development machine, 1.2 ms on a 168 MHz Cortex-M4F: under 1 % of `t_exp`)
-    ///   instead of 50-80 times per expansion (a CPU-time clock costs about 0.5 us a read);
+    /// - `clock_every` 256 and `clock_every_max` 8,192: the deadlines read the clock at most
+    ///   every 256 work units instead of 50-80 times per expansion, and the readings are paced
+    ///   by what they cost: a CPU-time clock (about 0.5 us a reading here) is read every 8,192
+    ///   units (about 100 us), a cycle counter or a virtual clock still every 256 (a few us
+    ///   on the development machine, about 0.3 ms on a 168 MHz Cortex-M4F);
     /// - rewiring visits 4 nodes per phase and expansion instead of 24: three times the
     ///   expansions, the same rewiring work per second;
     /// - `e_search` 20 m: long steps until the first solution (the edges are tested free as
@@ -269,7 +278,8 @@ impl Config {
     /// - `density_trades`: a dense neighbourhood inside the ellipse trades its worst leaf for
     ///   a state that bounds a shorter path, so the tree keeps improving at the density rule.
     pub const fn tuned(mut self) -> Self {
-        self.clock_every = 1024;
+        self.clock_every = 256;
+        self.clock_every_max = 8192;
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
         self.e_search = 20.0;
         self.steer_fan = true;

@@ -484,11 +484,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.grid().point_free(agent) {
             return Err(InputError::InObstacle);
         }
-        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
-            .reading_every(self.cfg.clock_every);
         // The call's budget starts now: anchoring and following the agent spend it too, and
         // they come first, so nothing but the final check runs after the last expansion.
         self.call = Deadline::after(clock, self.cfg.t_exp);
+        let meter = self.meter(clock);
         let trapped = self.map.obstacles().contains(agent);
         if !trapped {
             self.anchor(agent, &meter);
@@ -507,11 +506,19 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// stands still (bounded as [`Planner::plan`]). The waypoint is the root, unchecked: no
     /// agent position is given.
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
-        let meter = Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
-            .reading_every(self.cfg.clock_every);
         self.call = Deadline::after(clock, self.cfg.t_exp);
+        let meter = self.meter(clock);
         let expansions = self.expand_for(&meter);
         self.progress(None, expansions, false, &meter)
+    }
+
+    /// The call's meter (set after the call's deadline, whose reading it may pace against):
+    /// the work cap, and the clock readings of [`Config::clock_every`] and
+    /// [`Config::clock_every_max`].
+    fn meter<'c, C: Clock + ?Sized>(&self, clock: &'c C) -> Meter<'c, C> {
+        Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
+            .reading_every(self.cfg.clock_every)
+            .paced(self.cfg.clock_every_max, self.call.start())
     }
 
     /// Expansions until the call's deadline (set by the caller) or the expansion cap.

@@ -163,6 +163,8 @@ fn run_with<M: Metric>(
     cfg.rewire_new = flags & 4 != 0;
     if flags & 8 != 0 {
         cfg.clock_every = 256;
+        // Paced readings up to 256 + 512 k units (k = 0: not paced).
+        cfg.clock_every_max = 256 + (b.u8() as u32 % 8) * 512;
     }
     if flags & 16 != 0 {
         cfg.n_max_informed = cfg.n_max.saturating_mul(4);
