@@ -251,12 +251,13 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             return;
         };
         let (dt, du) = (t.saturating_sub(t0), used.saturating_sub(at));
-        // Units whose work takes PACE readings' time: PACE * cost / (dt / du).
-        let units = if dt == 0 {
-            u64::MAX // the clock did not move: readings tell nothing until it does
-        } else {
-            (PACE.saturating_mul(self.cost.get()).saturating_mul(du) / dt).max(1)
-        };
+        // Units whose work takes PACE readings' time: PACE * cost / (dt / du); a clock that
+        // did not move tells nothing until it does (the most units).
+        let units = PACE
+            .saturating_mul(self.cost.get())
+            .saturating_mul(du)
+            .checked_div(dt)
+            .unwrap_or(u64::MAX);
         let units = if self.cost.get() == 0 { 0 } else { units };
         let paced = units.clamp(u64::from(self.every), u64::from(self.most));
         self.pace.set(u32::try_from(paced).unwrap_or(self.most));
