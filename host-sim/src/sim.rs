@@ -138,12 +138,26 @@ pub fn with_planner_at<const N: usize, T>(
     start: bi_am_rrt::Point,
     f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
 ) -> Result<T> {
-    prep.scenario.validate()?;
     let mut storage: Box<Storage<N, BUCKETS>> = Box::default();
+    with_planner_in(&mut storage, prep, cfg, seed, start, f)
+}
+
+/// [`with_planner_at`] in storage the caller keeps: a planner starts on the storage as a
+/// firmware's does on its `static` (the planner resets it), so a benchmark that runs many
+/// planners neither allocates nor touches fresh memory inside its measurements.
+pub fn with_planner_in<const N: usize, T>(
+    storage: &mut Storage<N, BUCKETS>,
+    prep: &Prepared,
+    cfg: Config,
+    seed: u64,
+    start: bi_am_rrt::Point,
+    f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
+) -> Result<T> {
+    prep.scenario.validate()?;
     let metric = prep.metric(cfg.metric)?;
     let map = Map::new(prep.scenario.map.grid());
     let rng = XorShiftRng::seed_from_u64(seed);
-    let mut planner = Planner::new(&mut storage, map, metric, rng, prep.config(cfg), start)
+    let mut planner = Planner::new(storage, map, metric, rng, prep.config(cfg), start)
         .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
     f(&mut planner)
 }
