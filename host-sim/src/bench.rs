@@ -23,7 +23,7 @@ use anyhow::{Context, Result, anyhow};
 use bi_am_rrt::Config;
 use serde::Serialize;
 
-use crate::clock::CpuClock;
+use crate::clock::{CpuClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
 use crate::maps::Scenario;
 use crate::optimum::leg_starts;
 use crate::sim::{BUCKETS, Prepared, SizedPlanner, with_planner_in};
@@ -125,6 +125,64 @@ pub struct BenchArgs {
     pub table: crate::diffusion::TableOptions,
     /// OMPL's RRT-Connect harness (`benches/ompl`), run on every leg beside our planners.
     pub ompl: Option<PathBuf>,
+    /// The planners' clock: thread CPU time, or the virtual clock (work units at
+    /// [`VIRTUAL_NS_PER_UNIT`] ns each: repeatable figures for comparing algorithmic changes,
+    /// blind to how fast a unit of work runs).
+    pub clock: BenchClock,
+}
+
+/// The clock of a bench ([`BenchArgs::clock`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchClock {
+    /// Thread CPU time.
+    #[default]
+    Cpu,
+    /// Work-driven, repeatable.
+    Virtual,
+}
+
+/// A bench run's clock, counting its readings.
+enum RunClock {
+    Cpu(CpuClock),
+    Virtual(bi_am_rrt::clock::FakeClock, std::cell::Cell<u64>),
+}
+
+impl RunClock {
+    fn new(kind: BenchClock) -> Self {
+        match kind {
+            BenchClock::Cpu => Self::Cpu(CpuClock::new()),
+            BenchClock::Virtual => {
+                Self::Virtual(virtual_clock(VIRTUAL_NS_PER_UNIT), std::cell::Cell::new(0))
+            }
+        }
+    }
+
+    fn reads(&self) -> u64 {
+        match self {
+            Self::Cpu(c) => c.reads(),
+            Self::Virtual(_, r) => r.get(),
+        }
+    }
+}
+
+impl bi_am_rrt::clock::Clock for RunClock {
+    fn now(&self) -> u64 {
+        match self {
+            Self::Cpu(c) => c.now(),
+            Self::Virtual(c, r) => {
+                r.set(r.get() + 1);
+                c.now()
+            }
+        }
+    }
+    fn ticks_per_second(&self) -> u64 {
+        1_000_000_000
+    }
+    fn charge(&self, units: u32) {
+        if let Self::Virtual(c, _) = self {
+            c.charge(units);
+        }
+    }
 }
 
 /// One run: one leg, variant and seed.
@@ -198,9 +256,36 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                         &args.budgets[..]
                     };
                     let r = match args.nodes {
-                        2048 => one(&mut arenas.n2048, &prep, v, seed, start, goal, budgets),
-                        4096 => one(&mut arenas.n4096, &prep, v, seed, start, goal, budgets),
-                        8192 => one(&mut arenas.n8192, &prep, v, seed, start, goal, budgets),
+                        2048 => one(
+                            args.clock,
+                            &mut arenas.n2048,
+                            &prep,
+                            v,
+                            seed,
+                            start,
+                            goal,
+                            budgets,
+                        ),
+                        4096 => one(
+                            args.clock,
+                            &mut arenas.n4096,
+                            &prep,
+                            v,
+                            seed,
+                            start,
+                            goal,
+                            budgets,
+                        ),
+                        8192 => one(
+                            args.clock,
+                            &mut arenas.n8192,
+                            &prep,
+                            v,
+                            seed,
+                            start,
+                            goal,
+                            budgets,
+                        ),
                         n => return Err(anyhow!("--nodes {n}: use 2048, 4096 or 8192")),
                     }?;
                     if seed == 0 {
@@ -353,7 +438,9 @@ struct Arenas {
     n8192: Option<Box<Storage<8192, BUCKETS>>>,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn one<const N: usize>(
+    kind: BenchClock,
     storage: &mut Option<Box<Storage<N, BUCKETS>>>,
     prep: &Prepared,
     v: &Variant,
@@ -364,7 +451,7 @@ fn one<const N: usize>(
 ) -> Result<Measured> {
     let storage = storage.get_or_insert_with(Box::default);
     with_planner_in::<N, _>(storage, prep, v.cfg, seed, start, |planner| {
-        measure(planner, goal, budgets)
+        measure(planner, goal, budgets, kind)
     })
 }
 
@@ -373,8 +460,9 @@ fn measure<const N: usize>(
     planner: &mut SizedPlanner<'_, '_, N>,
     goal: bi_am_rrt::Point,
     budgets: &[f64],
+    kind: BenchClock,
 ) -> Result<Measured> {
-    let clock = CpuClock::new();
+    let clock = RunClock::new(kind);
     let t0 = bi_am_rrt::clock::Clock::now(&clock);
     planner.set_goal(goal).map_err(|e| anyhow!("goal: {e}"))?;
     let mut costs = Vec::with_capacity(budgets.len());

@@ -202,6 +202,10 @@ enum Command {
         /// `benches/ompl` harness binary (see its README; needs libompl-dev).
         #[arg(long)]
         ompl: Option<PathBuf>,
+        /// The planners' clock: thread CPU time, or the virtual clock (work units, repeatable:
+        /// for comparing algorithmic changes; its "us" are virtual).
+        #[arg(long, value_enum, default_value = "cpu")]
+        clock: host_sim::bench::BenchClock,
     },
     /// Soak test: one planner and one agent for a long time with a new random goal every few
     /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
@@ -545,6 +549,7 @@ fn main() -> Result<()> {
             table,
             out,
             ompl,
+            clock,
         } => {
             if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
                 bail!("--budgets: every budget must be a positive number of seconds");
@@ -562,6 +567,7 @@ fn main() -> Result<()> {
                 out,
                 table: table.options(),
                 ompl,
+                clock,
             })
             .map(|_| ())
         }

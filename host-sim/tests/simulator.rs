@@ -725,6 +725,7 @@ fn bench_measures_every_leg_variant_and_seed() {
         out: dir.path().to_path_buf(),
         table: TableOptions::default(),
         ompl: None,
+        clock: host_sim::bench::BenchClock::Virtual,
     })
     .unwrap();
     assert_eq!(rows.len(), legs * 2 * 2);
@@ -776,6 +777,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
         out: dir.path().join("out"),
         table: TableOptions::default(),
         ompl: Some(script.clone()),
+        clock: host_sim::bench::BenchClock::Cpu,
     };
     let rows = host_sim::bench::run(&args(3)).unwrap();
     let ompl: Vec<_> = rows
