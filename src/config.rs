@@ -199,6 +199,12 @@ pub struct Config {
     /// sine-cosine serves the whole batch. Off: independent uniform draws (the paper's stochastic
     /// steering as the reference implements it).
     pub steer_fan: bool,
+    /// `Nearest` tests the Euclidean-nearest node's view of the sample only over the steering
+    /// step towards it (at most `e_max`, or `e_search` while searching) instead of the whole
+    /// way: a node that can make its step is the nearest, and the steering starts from that
+    /// tested step. A far sample (the goal behind a wall, a uniform state across the map) no
+    /// longer costs a segment test as long as the map. Off: the whole segment (AM-RRT*).
+    pub nearest_step: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -243,6 +249,7 @@ impl Config {
             dense_beacons: false,
             density_trades: false,
             steer_fan: false,
+            nearest_step: false,
             profile: Profile::Paper,
         }
     }
@@ -283,6 +290,7 @@ impl Config {
         self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
         self.e_search = 20.0;
         self.steer_fan = true;
+        self.nearest_step = true;
         self.steer_candidates = 16;
         self.n_max_informed = self.n_max.saturating_mul(4);
         self.recycle_when_full = true;

@@ -287,10 +287,36 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         x: Point,
         meter: &Meter<'_, C>,
     ) -> Option<NodeId> {
+        self.nearest_for_step(env, x, None, meter).map(|(id, _)| id)
+    }
+
+    /// `Nearest(T, x)`, and whether the step of length `step` from it towards `x` is known to
+    /// be free: with `step` (and [`Config::nearest_step`]) the Euclidean-nearest node's view
+    /// is tested over that step only (module docs).
+    fn nearest_for_step<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &self,
+        env: &Env<'_, '_, M, K>,
+        x: Point,
+        step: Option<f32>,
+        meter: &Meter<'_, C>,
+    ) -> Option<(NodeId, bool)> {
         meter.charge(8);
         let (near, _) = self.index.nearest(x, self.tree.positions())?;
-        if env.metric.is_euclidean() || env.free(self.pos(near), x, meter) {
-            return Some(near);
+        if env.metric.is_euclidean() {
+            return Some((near, false));
+        }
+        let a = self.pos(near);
+        match step {
+            Some(e) => {
+                if env.free(a, a.step_towards(x, e), meter) {
+                    return Some((near, true));
+                }
+            }
+            None => {
+                if env.free(a, x, meter) {
+                    return Some((near, false));
+                }
+            }
         }
         let mut best = (near, f32::INFINITY);
         let to = env.metric.prepare(x);
@@ -305,10 +331,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 best = (id, d);
             }
         }
-        Some(best.0)
+        Some((best.0, false))
     }
 
     /// Steers from node `from` towards `x` (module docs); `None` when no state can be reached.
+    /// `step_free`: the straight step was already tested free ([`Config::nearest_step`]).
+    #[allow(clippy::too_many_arguments)]
     fn steer<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
         &self,
         env: &Env<'_, '_, M, K>,
@@ -316,11 +344,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         from: NodeId,
         x: Point,
         e_max: f32,
+        step_free: bool,
         meter: &Meter<'_, C>,
     ) -> Option<Point> {
         let a = self.pos(from);
         let step = a.step_towards(x, e_max);
-        if env.free(a, step, meter) {
+        if step_free || env.free(a, step, meter) {
             return Some(step);
         }
         if env.cfg.base == Base::RtRrt {
@@ -517,7 +546,6 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             )?,
         };
         meter.charge(4);
-        let x_nearest = self.nearest(env, x_rand, meter)?;
         // Longer steps while this tree's goal is not in it (tuned configurations).
         let searching = target.as_deref().is_some_and(|t| t.node.is_none());
         let step = if searching {
@@ -525,7 +553,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         } else {
             cfg.e_max
         };
-        let x_new = self.steer(env, rng, x_nearest, x_rand, step, meter)?;
+        let (x_nearest, step_free) =
+            self.nearest_for_step(env, x_rand, cfg.nearest_step.then_some(step), meter)?;
+        let x_new = self.steer(env, rng, x_nearest, x_rand, step, step_free, meter)?;
         let is_goal = target
             .as_deref()
             .is_some_and(|t| t.node.is_none() && t.pos == x_new);
@@ -950,7 +980,7 @@ mod tests {
             };
             for seed in 0..20 {
                 let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(seed);
-                let got = store.steer(&env, &mut rng, NodeId(0), x, 8.0, &meter);
+                let got = store.steer(&env, &mut rng, NodeId(0), x, 8.0, false, &meter);
                 let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(seed);
                 let mut want: Option<(Point, f32)> = None;
                 for _ in 0..candidates {
@@ -967,6 +997,60 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// `nearest_step`: the Euclidean-nearest node is `Nearest` when its steering step towards
+    /// the sample is free, though the rest of the way is blocked (whole-segment rule: the
+    /// metric's nearest), and the step is then taken without a second test; a node whose step
+    /// is blocked gives way to the metric's nearest, as before.
+    #[test]
+    fn nearest_step_tests_only_the_step() {
+        use rand_core::SeedableRng;
+        // A wall at row 10, columns 0-17; free beyond column 17.
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        pack_grid(&mut bits, 20, 20, |c, r| r == 10 && c < 18).unwrap();
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
+        let mut store = TreeStore::<16, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        // a: Euclidean nearest to x (14.42 m), about 4 m of free way towards it, then the wall.
+        // b: nearer x by the Manhattan metric only (14.5 against a's 20).
+        let a = Point::new(12.5, 6.5);
+        store.reset(Point::new(1.5, 1.5));
+        let root = NodeId(0);
+        let ida = store.insert(a, root, false).unwrap();
+        let b = Point::new(4.5, 4.0);
+        let idb = store.insert(b, root, false).unwrap();
+        let x = Point::new(4.5, 18.5);
+        assert!(a.dist(x) < b.dist(x));
+        assert!(Manhattan.distance(b, x) < Manhattan.distance(a, x));
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        let cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
+        let env = Env {
+            map: &map,
+            metric: &Manhattan,
+            cfg: &cfg,
+            call: Deadline::NEVER,
+        };
+        assert_eq!(
+            store.nearest(&env, x, &meter),
+            Some(idb),
+            "whole segment: blocked"
+        );
+        assert_eq!(
+            store.nearest_for_step(&env, x, Some(3.0), &meter),
+            Some((ida, true)),
+            "the 3 m step is free"
+        );
+        assert_eq!(
+            store.nearest_for_step(&env, x, Some(5.0), &meter),
+            Some((idb, false)),
+            "a 5 m step reaches the wall"
+        );
+        // The tested step is taken as it is.
+        let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
+        let got = store.steer(&env, &mut rng, ida, x, 3.0, true, &meter);
+        assert_eq!(got, Some(a.step_towards(x, 3.0)));
     }
 
     /// Beacon samples ([`Config::p_beacon`]) fall within `e_max` of a node of the path to the

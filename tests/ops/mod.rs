@@ -191,6 +191,9 @@ fn run_with<M: Metric>(
     if more & 1 != 0 {
         cfg.root_step = cfg.e_max * (0.05 + b.unit());
     }
+    // A third byte: Nearest's view over the steering step only.
+    let third = b.u8();
+    cfg.nearest_step = third & 1 != 0;
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
