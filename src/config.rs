@@ -205,6 +205,17 @@ pub struct Config {
     /// tested step. A far sample (the goal behind a wall, a uniform state across the map) no
     /// longer costs a segment test as long as the map. Off: the whole segment (AM-RRT*).
     pub nearest_step: bool,
+    /// A segment tested in an expansion is not tested again in it: the steering's straight
+    /// step after `nearest_step`'s test of it, the parent's segment after the steering's, the
+    /// greedy connection's segment after the meet test found it blocked. Same decisions, less
+    /// work. Off: every test is made (and charged) as the paper's implementation does.
+    pub reuse_tests: bool,
+    /// Root rewiring of both trees while the goal is not in the forward tree (the paper). Off:
+    /// while searching, every expansion goes to growth, and rewiring starts when the goal
+    /// joins (the reverse tree, dropped then, is never rewired). On the reference maps the
+    /// first paths were the same either way (2,400 benchmark runs): a tree built by choosing
+    /// each new node's best parent has little to rewire before it holds a path.
+    pub rewire_while_searching: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -250,6 +261,8 @@ impl Config {
             density_trades: false,
             steer_fan: false,
             nearest_step: false,
+            reuse_tests: false,
+            rewire_while_searching: true,
             profile: Profile::Paper,
         }
     }
@@ -291,6 +304,8 @@ impl Config {
         self.e_search = 20.0;
         self.steer_fan = true;
         self.nearest_step = true;
+        self.reuse_tests = true;
+        self.rewire_while_searching = false;
         self.steer_candidates = 16;
         self.n_max_informed = self.n_max.saturating_mul(4);
         self.recycle_when_full = true;

@@ -70,6 +70,9 @@ use crate::tree::{Cost, NodeId, Tree};
 /// next waypoint and the nodes the agent already stands on.
 pub const FOLLOW_STEPS: usize = 4;
 
+/// Most pairs one meet test tries (the cheapest by total cost).
+const MEET_PAIRS: usize = 16;
+
 /// Storage for a planner's two trees: `N` nodes and `B` index buckets each. Keep it wherever
 /// there is room (a `static`, a `Box`, the stack of a thread with a large stack); the planner
 /// borrows it.
@@ -817,9 +820,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if grown.goal_joined {
             self.goal_joined(meter);
         } else if let (Some(a), true) = (grown.added, self.rev_goal.is_some())
-            && !self.try_meet(a, true, meter)
+            && let Err(blocked) = self.try_meet(a, true, meter)
         {
-            self.connect(a, true, meter);
+            self.connect(a, true, &blocked, meter);
         }
         // Rewiring of the forward tree.
         let env = Env {
@@ -828,9 +831,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             cfg: &self.cfg,
             call: self.call,
         };
-        let slice = self.slice(meter, self.cfg.t_root, call);
-        self.fwd
-            .rewire_root(&env, slice, self.cfg.new_rewiring, meter);
+        let searching = self.goal.is_some_and(|g| g.node.is_none());
+        if self.cfg.rewire_while_searching || !searching {
+            let slice = self.slice(meter, self.cfg.t_root, call);
+            self.fwd
+                .rewire_root(&env, slice, self.cfg.new_rewiring, meter);
+        }
         match (self.cfg.base, self.goal) {
             (Base::RtRrt, _) => {
                 let slice = self.slice(meter, self.cfg.t_goal, call);
@@ -857,11 +863,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             self.full |= grown.full;
             self.stats.reverse_expansions = self.stats.reverse_expansions.saturating_add(1);
             if let Some(b) = grown.added
-                && !self.try_meet(b, false, meter)
+                && let Err(blocked) = self.try_meet(b, false, meter)
             {
-                self.connect(b, false, meter);
+                self.connect(b, false, &blocked, meter);
             }
-            if self.rev_goal.is_some() {
+            if self.rev_goal.is_some() && self.cfg.rewire_while_searching {
                 let env = Env {
                     map: &self.map,
                     metric: &self.metric,
@@ -893,7 +899,14 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// With [`Config::connect`]: the other tree walks straight towards node `new` of one tree
     /// (`forward` tells which), and the two are grafted when it reaches it (module docs).
-    fn connect<C: Clock + ?Sized>(&mut self, new: NodeId, forward: bool, meter: &Meter<'_, C>) {
+    /// `blocked`: nodes of the other tree whose segment to `new` the meet test found blocked.
+    fn connect<C: Clock + ?Sized>(
+        &mut self,
+        new: NodeId,
+        forward: bool,
+        blocked: &[NodeId],
+        meter: &Meter<'_, C>,
+    ) {
         if !self.cfg.connect {
             return;
         }
@@ -904,12 +917,17 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call: self.call,
         };
         let step = self.cfg.search_step();
+        let blocked = if self.cfg.reuse_tests { blocked } else { &[] };
         let pair = if forward {
             let p = self.fwd.pos(new);
-            self.rev.connect(&env, p, step, meter).map(|b| (new, b))
+            self.rev
+                .connect(&env, p, step, blocked, meter)
+                .map(|b| (new, b))
         } else {
             let p = self.rev.pos(new);
-            self.fwd.connect(&env, p, step, meter).map(|a| (a, new))
+            self.fwd
+                .connect(&env, p, step, blocked, meter)
+                .map(|a| (a, new))
         };
         if let Some((a, b)) = pair {
             self.meet(a, b, meter);
@@ -930,14 +948,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// Meet test for a node just added to one tree (`forward` tells which) against the other,
-    /// and graft on success (module docs). Returns whether the trees met.
+    /// and graft on success (module docs). `Ok` when the trees met; otherwise `Err` with the
+    /// nodes of the other tree whose segment to `new` was found blocked (none when a free pair
+    /// was found but the graft was refused).
     fn try_meet<C: Clock + ?Sized>(
         &mut self,
         new: NodeId,
         forward: bool,
         meter: &Meter<'_, C>,
-    ) -> bool {
-        const PAIRS: usize = 16;
+    ) -> Result<(), heapless::Vec<NodeId, MEET_PAIRS>> {
+        const PAIRS: usize = MEET_PAIRS;
         let (this, other) = if forward {
             (&*self.fwd, &*self.rev)
         } else {
@@ -978,14 +998,18 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             .iter()
             .find(|(_, id)| env.free(p, other.pos(*id), meter))
         else {
-            return false;
+            return Err(best.iter().map(|&(_, id)| id).collect());
         };
         let (a, b) = if forward {
             (new, partner)
         } else {
             (partner, new)
         };
-        self.meet(a, b, meter)
+        if self.meet(a, b, meter) {
+            Ok(())
+        } else {
+            Err(heapless::Vec::new())
+        }
     }
 
     /// Grafts the reverse tree's trunk from `b` to its root (the goal) below forward node `a`,

@@ -335,7 +335,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// Steers from node `from` towards `x` (module docs); `None` when no state can be reached.
-    /// `step_free`: the straight step was already tested free ([`Config::nearest_step`]).
+    /// `step_free`: the straight step was already tested free ([`Config::nearest_step`],
+    /// [`Config::reuse_tests`]).
     #[allow(clippy::too_many_arguments)]
     fn steer<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -514,7 +515,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let mut near = Near::new();
         self.nearby(goal, e_max, &mut near, meter);
         keep_candidate(&mut near, q);
-        let parent = self.best_parent(env, goal, &mut near, meter)?;
+        let parent = self.best_parent(env, goal, &mut near, None, meter)?;
         self.insert_making_room(rng, goal, parent, Some(target), None, meter, full)
     }
 
@@ -555,7 +556,15 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         };
         let (x_nearest, step_free) =
             self.nearest_for_step(env, x_rand, cfg.nearest_step.then_some(step), meter)?;
-        let x_new = self.steer(env, rng, x_nearest, x_rand, step, step_free, meter)?;
+        let x_new = self.steer(
+            env,
+            rng,
+            x_nearest,
+            x_rand,
+            step,
+            step_free && cfg.reuse_tests,
+            meter,
+        )?;
         let is_goal = target
             .as_deref()
             .is_some_and(|t| t.node.is_none() && t.pos == x_new);
@@ -598,7 +607,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
         // Keep x_nearest a candidate even when the list was truncated.
         keep_candidate(&mut near, x_nearest);
-        let parent = self.best_parent(env, x_new, &mut near, meter)?;
+        // The steering's segment from x_nearest is known free.
+        let seen = cfg.reuse_tests.then_some(x_nearest);
+        let parent = self.best_parent(env, x_new, &mut near, seen, meter)?;
         // The new state's cost bound below `parent`: a lower bound of a path through it.
         let bound = |s: &Self, goal: Point| {
             s.cost(parent)
@@ -648,16 +659,20 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// steps of at most `step` towards `x`, each added below the last when its segment is free,
     /// until a node within `step` of `x` sees it over a free segment (returned), or a step is
     /// blocked, the arena is full or [`CONNECT_STEPS`] nodes were added (`None`; the nodes
-    /// added stay, as in RRT-Connect).
+    /// added stay, as in RRT-Connect). `blocked`: nodes whose segment to `x` is known blocked.
     pub(crate) fn connect<M: Metric, C: Clock + ?Sized, const K: usize>(
         &mut self,
         env: &Env<'_, '_, M, K>,
         x: Point,
         step: f32,
+        blocked: &[NodeId],
         meter: &Meter<'_, C>,
     ) -> Option<NodeId> {
         meter.charge(8);
         let (mut from, _) = self.index.nearest(x, self.tree.positions())?;
+        if blocked.contains(&from) && self.pos(from).dist(x) <= step {
+            return None; // the meet test found this segment blocked
+        }
         for _ in 0..=CONNECT_STEPS {
             let a = self.pos(from);
             if a.dist(x) <= step {
@@ -908,12 +923,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// The candidate giving `x` the lowest cost over a free segment: candidates are ordered by
-    /// the cost they would give, and segments are tested in that order until one is free.
+    /// the cost they would give, and segments are tested in that order until one is free
+    /// (`seen`'s segment to `x` is known free: the steering tested it).
     pub(crate) fn best_parent<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
         env: &Env<'_, '_, M, K>,
         x: Point,
         candidates: &mut Near,
+        seen: Option<NodeId>,
         meter: &Meter<'_, C>,
     ) -> Option<NodeId> {
         let key = |id: NodeId| self.cost(id).extend(self.pos(id).dist(x), false);
@@ -921,7 +938,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         candidates
             .iter()
             .copied()
-            .find(|&id| env.free(self.pos(id), x, meter))
+            .find(|&id| seen == Some(id) || env.free(self.pos(id), x, meter))
     }
 }
 

@@ -542,39 +542,41 @@ fn tuned_configurations_reach_the_goal() {
 #[test]
 fn a_full_tuned_tree_keeps_improving() {
     let s = &builtin::BUG_TRAP;
-    let mut last = Vec::new();
+    // Per configuration: (length when the arena filled, length 200 calls later) per seed.
+    let mut runs = Vec::new();
     for cfg in [
         Config::bi_am_rrt(MetricKind::Euclidean),
         Config::bi_am_rrt(MetricKind::Euclidean).tuned(),
     ] {
-        let mut storage = Box::new(Storage::<256, 256>::new());
-        let mut p = planner_on(&mut storage, s, Euclidean, cfg, 11);
-        p.set_goal(s.goals[0]).unwrap();
-        let clock = clock();
-        let mut at_full = None;
-        for _ in 0..200 {
-            let pr = p.grow(&clock);
-            if pr.nodes == 256 && pr.goal_in_tree && at_full.is_none() {
-                at_full = pr.goal_cost.map(|c| c.length);
+        let mut lengths = Vec::new();
+        for seed in 11..=16 {
+            let mut storage = Box::new(Storage::<256, 256>::new());
+            let mut p = planner_on(&mut storage, s, Euclidean, cfg, seed);
+            p.set_goal(s.goals[0]).unwrap();
+            let clock = clock();
+            let mut at_full = None;
+            for _ in 0..200 {
+                let pr = p.grow(&clock);
+                if pr.nodes == 256 && pr.goal_in_tree && at_full.is_none() {
+                    at_full = pr.goal_cost.map(|c| c.length);
+                }
             }
+            let at_full = at_full.expect("the arena filled with the goal in the tree");
+            let end = p.tree().cost(p.goal_node().unwrap()).unwrap();
+            assert_eq!(p.tree().len(), 256);
+            assert!(!end.blocked && end.length <= at_full);
+            p.tree().validate().unwrap();
+            lengths.push((at_full, end.length));
         }
-        let at_full = at_full.expect("the arena filled with the goal in the tree");
-        let end = p.tree().cost(p.goal_node().unwrap()).unwrap();
-        assert_eq!(p.tree().len(), 256);
-        assert!(!end.blocked && end.length <= at_full);
-        p.tree().validate().unwrap();
-        eprintln!(
-            "{}: {at_full} m when full, {} m after",
-            cfg.name(),
-            end.length
-        );
-        last.push((at_full, end.length));
+        eprintln!("{}: {lengths:?}", cfg.name());
+        runs.push(lengths);
     }
-    // Measured (seed 11, 200 calls of 20 ms): the paper's 96.2 m stays 96.2 m once full; the
-    // tuned tree goes on from 95.6 m to 94.7 m by trading leaves (the optimum is 74.4 m; a
-    // 256-node tree on this map stalls far from it, whatever the rewiring settings tried).
-    let (full, end) = last[1];
-    assert!(end < full, "tuned: {full} m when full, {end} m after");
+    // Measured (seeds 11-16, 200 calls of 20 ms): the paper's tree improves on no seed once
+    // full; the tuned one on four of six (78.9 -> 78.5, 78.5 -> 77.6, 83.6 -> 80.0, 94.5 ->
+    // 93.5 m; the optimum is 74.4 m: a 256-node tree on this map stalls short of it).
+    let improved = |l: &[(f32, f32)]| l.iter().filter(|(full, end)| end < full).count();
+    assert!(improved(&runs[1]) >= 3, "tuned: {:?}", runs[1]);
+    assert!(improved(&runs[1]) > improved(&runs[0]), "{runs:?}");
 }
 
 /// The occupied buckets of the planner's spatial index (`side`-metre squares from the origin).
@@ -925,4 +927,54 @@ fn density_trades_shorten_the_path() {
     // Measured (seed 3, 60 calls of 20 ms): 75.21 m with trades, 75.57 m without (the
     // goal's optimum: 74.4 m).
     assert!(runs[0].0 < runs[1].0, "{runs:?}");
+}
+
+/// `Config::reuse_tests` only skips segment tests whose answer is known: the trees grow the
+/// same, node for node, with it on and off (a clock that never moves and an expansion cap
+/// give both runs the same expansions; only the work done differs).
+#[test]
+fn reusing_tests_changes_no_decision() {
+    let trees = |s: &Scenario, seed: u64, reuse: bool| {
+        let mut cfg = Config::bi_am_rrt(MetricKind::Diffusion)
+            .tuned()
+            .with_sigma(s.sigma);
+        cfg.reuse_tests = reuse;
+        cfg.max_expansions_per_call = 150;
+        cfg.max_work_per_call = u32::MAX;
+        let table = landmark_table(&s.grid, 8);
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let rng = XorShiftRng::seed_from_u64(seed);
+        let metric = DiffusionTable::new(&table).unwrap();
+        let mut planner = Planner::new(
+            &mut storage,
+            Map::<K>::new(s.grid),
+            metric,
+            rng,
+            cfg,
+            s.start,
+        )
+        .unwrap();
+        planner.set_goal(s.goals[0]).unwrap();
+        let frozen = FakeClock::nanos();
+        let mut seen = Vec::new();
+        for _ in 0..4 {
+            planner.grow(&frozen);
+            for t in [planner.tree(), planner.reverse_tree()] {
+                seen.push(
+                    t.ids()
+                        .map(|id| (t.position(id), t.parent(id)))
+                        .collect::<Vec<_>>(),
+                );
+            }
+            seen.push(vec![(planner.goal_node().map(|_| Point::ZERO), None)]);
+        }
+        seen
+    };
+    for s in [&builtin::BUG_TRAP, &builtin::MAZE] {
+        for seed in 0..4 {
+            let (off, on) = (trees(s, seed, false), trees(s, seed, true));
+            assert!(off[0].len() > 50, "the trees grew");
+            assert_eq!(off, on, "seed {seed}");
+        }
+    }
 }

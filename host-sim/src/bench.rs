@@ -42,7 +42,7 @@ pub struct Variant {
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
 /// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`, `e_max`,
 /// `n_max`, `n_max_informed`, `clock_every`, `clock_every_max`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`, `rewire_new`, `connect`, `path_shortcuts`, `p_beacon`,
-/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `density_trades`, `steer_fan`, `nearest_step`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
+/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `density_trades`, `steer_fan`, `nearest_step`, `reuse_tests`, `rewire_while_searching`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
 /// one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
     spec.split(',')
@@ -87,6 +87,8 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "clock_every" => cfg.clock_every = v.parse()?,
         "clock_every_max" => cfg.clock_every_max = v.parse()?,
         "nearest_step" => cfg.nearest_step = v.parse()?,
+        "reuse_tests" => cfg.reuse_tests = v.parse()?,
+        "rewire_while_searching" => cfg.rewire_while_searching = v.parse()?,
         "steer_candidates" => cfg.steer_candidates = v.parse()?,
         "p_goal" => cfg.p_goal = v.parse()?,
         "p_uniform" => cfg.p_uniform = v.parse()?,

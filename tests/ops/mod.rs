@@ -191,9 +191,12 @@ fn run_with<M: Metric>(
     if more & 1 != 0 {
         cfg.root_step = cfg.e_max * (0.05 + b.unit());
     }
-    // A third byte: Nearest's view over the steering step only.
+    // A third byte: Nearest's view over the steering step only, reused tests, no rewiring
+    // while searching.
     let third = b.u8();
     cfg.nearest_step = third & 1 != 0;
+    cfg.reuse_tests = third & 2 != 0;
+    cfg.rewire_while_searching = third & 4 == 0;
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
