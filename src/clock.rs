@@ -259,7 +259,7 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             .checked_div(dt)
             .unwrap_or(u64::MAX);
         let units = if self.cost.get() == 0 { 0 } else { units };
-        let paced = units.clamp(u64::from(self.every), u64::from(self.most));
+        let paced = units.max(u64::from(self.every)).min(u64::from(self.most));
         self.pace.set(u32::try_from(paced).unwrap_or(self.most));
     }
 

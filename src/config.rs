@@ -280,6 +280,9 @@ impl Config {
     ///   any other; rewiring shortens them later);
     /// - `steer_fan` with 16 candidates: the steering candidates spread evenly in angle, so
     ///   16 find the way around an obstacle as well as 24 independent draws did;
+    /// - `nearest_step`: `Nearest` tests its Euclidean choice over the steering step only;
+    ///   `reuse_tests`: no segment is tested twice in an expansion; `rewire_while_searching`
+    ///   off: no root rewiring before the goal joins (same first paths, less work);
     /// - `n_max_informed` 4 `n_max`: the tree densifies inside the informed ellipse after the
     ///   density rule has saturated the rest of the map;
     /// - `recycle_when_full`: a full arena trades leaves that cannot improve the path for

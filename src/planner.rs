@@ -12,7 +12,8 @@
 //! rewiring for `t_goal` instead. While the goal is not in
 //! the forward tree and bidirectional search is on, each step also expands the reverse tree
 //! (rooted at the goal, growing towards the agent's position when the goal was set) and
-//! rewires it from its root.
+//! rewires it from its root. With `rewire_while_searching` off (tuned), neither tree rewires
+//! from its root until the goal has joined.
 //!
 //! Following the agent: the path is read from the root to the goal (or, before the goal
 //! joins, to the node `Nearest` the goal). If the agent is within `e_max / 10` of the root and
@@ -41,7 +42,9 @@
 //! trunk (from `b` to the goal) is then grafted below `a`, each edge keeping its blocked flag,
 //! so the goal joins the forward tree; the reverse tree is emptied and search continues with the
 //! forward tree alone. With `connect` (tuned configurations), a node that meets nothing within
-//! `sigma` makes the other tree walk straight towards it from its nearest node, in free steps
+//! `sigma` (no free pair, or a refused graft) makes the other tree walk straight towards it
+//! from its nearest node (with `reuse_tests`, not when the meet test already found that
+//! node's segment blocked), in free steps
 //! of `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. Search
 //! time is read when the goal joins, not at the end of the call.
 //!
@@ -998,7 +1001,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             .iter()
             .find(|(_, id)| env.free(p, other.pos(*id), meter))
         else {
-            return Err(best.iter().map(|&(_, id)| id).collect());
+            let mut blocked = heapless::Vec::new();
+            for &(_, id) in &best {
+                let _ = blocked.push(id);
+            }
+            return Err(blocked);
         };
         let (a, b) = if forward {
             (new, partner)

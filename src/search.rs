@@ -12,7 +12,9 @@
 //!   the other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
 //!   is Euclidean; otherwise the node nearest by the assisting metric (a scan of the tree; the
-//!   Euclidean nearest if the metric cannot place `x`).
+//!   Euclidean nearest if the metric cannot place `x`). With `nearest_step` (tuned) only the
+//!   steering step towards `x` is tested, and with `reuse_tests` (tuned) the steering takes
+//!   that step, and the parent choice that segment, without testing them again.
 //! - Steering: a step of at most `e_max` along the segment when it is free (`e_search` instead
 //!   while the tree's goal is not in it, when a tuned configuration sets it). Otherwise AM-RRT*
 //!   with a non-Euclidean metric draws `steer_candidates` states in the disc of radius
