@@ -148,8 +148,8 @@ impl Deadline {
 /// every few hundred units bounds the overrun by that much work instead.
 ///
 /// A sparing meter may also *pace* its readings by what they cost ([`Meter::paced`]): it
-/// measures one reading (the first fresh reading of the call against the caller's reading
-/// that set the call's deadline, when no work was charged in between) and the clock's rate
+/// measures one reading (a reading right after the caller's reading that set the call's
+/// deadline) and the clock's rate
 /// per unit of work (between consecutive readings), and lets the interval grow from
 /// `every` up to `most` units so that a reading costs about 1/[`PACE`] of the work between
 /// two. A CPU-time clock (a system call) is then read every few thousand units; a cycle
@@ -167,8 +167,6 @@ pub struct Meter<'c, C: Clock + ?Sized> {
     most: u32,
     /// The current interval between readings, in work units.
     pace: Cell<u32>,
-    /// The caller's reading at the start of the call (for the cost of one reading).
-    origin: Cell<Option<u64>>,
     /// What one reading costs, in ticks (0 while unmeasured).
     cost: Cell<u64>,
     /// The last reading and the work done when it was taken.
@@ -195,7 +193,6 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             every: 0,
             most: 0,
             pace: Cell::new(0),
-            origin: Cell::new(None),
             cost: Cell::new(0),
             last: Cell::new(None),
         }
@@ -211,12 +208,17 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
 
     /// With readings paced by their cost (type docs): at least [`Meter::reading_every`]'s
     /// units between two readings, at most `most`. `origin` is the reading the caller took
-    /// just before (for the call's deadline): the meter's first reading, if no work was
-    /// charged before it, measures what a reading costs against it. Without a measured cost
-    /// the interval stays at the fewest units.
+    /// just before (for the call's deadline): when `most` is above the fewest units, the meter
+    /// reads the clock once now, and the difference is what a reading costs. (That reading
+    /// serves the first deadline checks, so a call reads its clock no more often than a
+    /// meter that reads every `every` units.)
     pub fn paced(mut self, most: u32, origin: u64) -> Self {
         self.most = most;
-        self.origin.set(Some(origin));
+        if most > self.every && self.used.get() == 0 {
+            let t = self.now();
+            self.cost.set(t.saturating_sub(origin));
+            self.last.set(Some((t, 0)));
+        }
         self
     }
 
@@ -239,15 +241,10 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
         t
     }
 
-    /// Pacing (type docs): measures a reading's cost at the first reading, then sets the
-    /// interval from the clock's rate between the last two readings.
+    /// Pacing (type docs): sets the interval from the clock's rate between the last two
+    /// readings and the cost of a reading ([`Meter::paced`]).
     fn repace(&self, t: u64, used: u64, last: Option<(u64, u64)>) {
         let Some((t0, at)) = last else {
-            if let Some(origin) = self.origin.take()
-                && used == 0
-            {
-                self.cost.set(t.saturating_sub(origin));
-            }
             return;
         };
         let (dt, du) = (t.saturating_sub(t0), used.saturating_sub(at));
@@ -467,18 +464,18 @@ mod tests {
     /// A paced meter on a clock whose reading costs 500 ticks and whose work costs 10 ticks
     /// a unit settles where a reading costs 1/128 of the work between two (u = 128 * 500 *
     /// u / (10 u + 500): u = 6,350 units); on a clock whose reading costs 1 tick it keeps the
-    /// fewest units, and without a measured cost (work before its first reading) too.
+    /// fewest units. Work done before the first deadline check does not matter: the meter
+    /// measures its clock when it is made.
     #[test]
     fn a_paced_meter_spaces_its_readings_by_their_cost() {
-        let readings = |step: u64, work_first: bool| {
+        let readings = |step: u64, work_first: u32| {
             let c = FakeClock::nanos().with_step(step).with_work_cost(10);
             let origin = c.now();
             let m = Meter::new(&c).reading_every(256).paced(8192, origin);
-            if work_first {
-                m.charge(1);
-            }
-            let d = Deadline::from_ticks(origin, u64::MAX / 2);
             let mut at = heapless::Vec::<u64, 512>::new();
+            at.push(0).unwrap(); // the meter's own reading
+            m.charge(work_first);
+            let d = Deadline::from_ticks(origin, u64::MAX / 2);
             for _ in 0..100_000 {
                 let before = m.last.get();
                 assert!(!m.expired(&d));
@@ -489,19 +486,24 @@ mod tests {
             }
             at
         };
-        let costly = readings(500, false);
-        let gaps: heapless::Vec<u64, 512> = costly.windows(2).map(|w| w[1] - w[0]).collect();
-        assert_eq!(gaps[0], 256, "the fewest units until the rate is known");
-        let settled = &gaps[3..];
-        assert!(
-            settled.iter().all(|&g| (6_300..=6_400).contains(&g)),
-            "{gaps:?}"
-        );
-        let cheap = readings(1, false);
-        assert!(cheap.windows(2).all(|w| w[1] - w[0] == 256), "{cheap:?}");
-        assert_eq!(cheap.len(), 100_000 / 256 + 1);
-        let unmeasured = readings(500, true);
-        assert!(unmeasured.windows(2).all(|w| w[1] - w[0] == 256));
+        for work_first in [0, 100] {
+            let costly = readings(500, work_first);
+            let gaps: heapless::Vec<u64, 512> = costly.windows(2).map(|w| w[1] - w[0]).collect();
+            assert!(
+                gaps[0] <= 256,
+                "the fewest units until the rate is known: {gaps:?}"
+            );
+            let settled = &gaps[3..];
+            assert!(
+                settled.iter().all(|&g| (6_300..=6_400).contains(&g)),
+                "{gaps:?}"
+            );
+            let cheap = readings(1, work_first);
+            assert!(
+                cheap.windows(2).skip(1).all(|w| w[1] - w[0] == 256),
+                "{cheap:?}"
+            );
+        }
         // A frozen clock: the cap still ends the loop, and readings are the most apart.
         let frozen = FakeClock::nanos().with_step(0);
         let m = Meter::with_cap(&frozen, 50_000)
