@@ -454,7 +454,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// `max_work_per_call` work units are done, whichever comes first; every rewiring phase
     /// checks the same limits before each node it visits, and the metric nearest scan every 64
     /// nodes (with [`Config::clock_every`] set, these checks reuse the last clock reading until
-    /// that much work has been done since it, adding at most that much work to the overrun).
+    /// that much work has been done since it, or with [`Config::clock_every_max`] up to that
+    /// much when a reading is costly, adding at most that much work to the overrun).
     /// On a real clock a call therefore overruns `t_exp` by at most the rest of one
     /// expansion step (plus the re-rootings of a retried follow): measured on a
     /// Cortex-M4F model (`examples/firmware.rs`, office, 2 x 2,048 nodes, 150 ms), 474 us at
