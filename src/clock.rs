@@ -149,8 +149,8 @@ impl Deadline {
 ///
 /// A sparing meter may also *pace* its readings by what they cost ([`Meter::paced`]): it
 /// measures one reading (a reading right after the caller's reading that set the call's
-/// deadline) and the clock's rate
-/// per unit of work (between consecutive readings), and lets the interval grow from
+/// deadline) and the clock's rate per unit of work (between consecutive readings), and lets
+/// the interval grow from
 /// `every` up to `most` units so that a reading costs about 1/[`PACE`] of the work between
 /// two. A CPU-time clock (a system call) is then read every few thousand units; a cycle
 /// counter or a virtual clock, whose readings cost next to nothing, still every `every`.
@@ -244,18 +244,18 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
     /// Pacing (type docs): sets the interval from the clock's rate between the last two
     /// readings and the cost of a reading ([`Meter::paced`]).
     fn repace(&self, t: u64, used: u64, last: Option<(u64, u64)>) {
-        let Some((t0, at)) = last else {
+        // A reading that costs nothing measurable keeps the fewest units (the pace as set).
+        let (Some((t0, at)), cost @ 1..) = (last, self.cost.get()) else {
             return;
         };
         let (dt, du) = (t.saturating_sub(t0), used.saturating_sub(at));
         // Units whose work takes PACE readings' time: PACE * cost / (dt / du); a clock that
         // did not move tells nothing until it does (the most units).
         let units = PACE
-            .saturating_mul(self.cost.get())
+            .saturating_mul(cost)
             .saturating_mul(du)
             .checked_div(dt)
             .unwrap_or(u64::MAX);
-        let units = if self.cost.get() == 0 { 0 } else { units };
         let paced = units.max(u64::from(self.every)).min(u64::from(self.most));
         self.pace.set(u32::try_from(paced).unwrap_or(self.most));
     }

@@ -166,13 +166,11 @@ impl<'a> OccupancyGrid<'a> {
             return false;
         }
         let (x, y) = (p.x * self.inv_cell, p.y * self.inv_cell);
-        let (max_row, max_col) = (
-            u32::from(self.height).saturating_sub(1),
-            u32::from(self.width).saturating_sub(1),
+        let (c0, c1) = (axis_index(x - M, self.width), axis_index(x + M, self.width));
+        let (r0, r1) = (
+            axis_index(y - M, self.height),
+            axis_index(y + M, self.height),
         );
-        let index = |v: f32, max: u32| to_u16(sat_u32(v).min(max));
-        let (c0, c1) = (index(x - M, max_col), index(x + M, max_col));
-        let (r0, r1) = (index(y - M, max_row), index(y + M, max_row));
         (r0..=r1).all(|row| self.span_free(row, c0, c1))
     }
 
@@ -223,17 +221,13 @@ impl<'a> OccupancyGrid<'a> {
             core::mem::swap(&mut p, &mut q);
         }
         let (dx, dy) = (q.x - p.x, q.y - p.y);
-        // Cell indices: values below zero truncate to 0 like a clamped floor; the far side is
-        // clamped to the last row or column.
-        let (max_row, max_col) = (
-            u32::from(self.height).saturating_sub(1),
-            u32::from(self.width).saturating_sub(1),
-        );
-        let index = |v: f32, max: u32| to_u16(sat_u32(v).min(max));
         if q.y + M < 0.0 || p.y - M > self.height as f32 {
             return ControlFlow::Continue(());
         }
-        let (row_lo, row_hi) = (index(p.y - M, max_row), index(q.y + M, max_row));
+        let (row_lo, row_hi) = (
+            axis_index(p.y - M, self.height),
+            axis_index(q.y + M, self.height),
+        );
         // x as a function of y is only used when the segment is not (nearly) horizontal, where
         // the ratio is well conditioned; a flat segment spans its whole x-range in every row.
         let steep = dy > M;
@@ -250,7 +244,7 @@ impl<'a> OccupancyGrid<'a> {
             if hi < 0.0 || lo > self.width as f32 {
                 continue;
             }
-            f(row, index(lo, max_col), index(hi, max_col))?;
+            f(row, axis_index(lo, self.width), axis_index(hi, self.width))?;
         }
         ControlFlow::Continue(())
     }
@@ -314,6 +308,13 @@ where
         }
     }
     Ok(())
+}
+
+/// The cell index of coordinate `v` (in cells) on an axis of `len` cells: values below zero
+/// truncate to 0 like a clamped floor; the far side is clamped to the last cell.
+#[inline]
+fn axis_index(v: f32, len: u16) -> u16 {
+    to_u16(sat_u32(v).min(u32::from(len).saturating_sub(1)))
 }
 
 /// A closed disc: a dynamic obstacle.

@@ -961,7 +961,6 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         forward: bool,
         meter: &Meter<'_, C>,
     ) -> Result<(), heapless::Vec<NodeId, MEET_PAIRS>> {
-        const PAIRS: usize = MEET_PAIRS;
         let (this, other) = if forward {
             (&*self.fwd, &*self.rev)
         } else {
@@ -970,8 +969,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let p = this.pos(new);
         let c_new = this.cost(new);
         let sigma = self.cfg.sigma;
-        // The PAIRS cheapest candidates, kept sorted by total cost.
-        let mut best: heapless::Vec<(Cost, NodeId), PAIRS> = heapless::Vec::new();
+        // The MEET_PAIRS cheapest candidates, kept sorted by total cost.
+        let mut best: heapless::Vec<(Cost, NodeId), MEET_PAIRS> = heapless::Vec::new();
         let mut seen = 0u32;
         let _ = other
             .index
@@ -983,7 +982,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                     blocked: c_new.blocked || c_other.blocked,
                 };
                 let at = best.partition_point(|(c, _)| *c <= total);
-                if at < PAIRS {
+                if at < MEET_PAIRS {
                     if best.is_full() {
                         best.pop();
                     }

@@ -308,17 +308,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             return Some((near, false));
         }
         let a = self.pos(near);
-        match step {
-            Some(e) => {
-                if env.free(a, a.step_towards(x, e), meter) {
-                    return Some((near, true));
-                }
-            }
-            None => {
-                if env.free(a, x, meter) {
-                    return Some((near, false));
-                }
-            }
+        let end = step.map_or(x, |e| a.step_towards(x, e));
+        if env.free(a, end, meter) {
+            return Some((near, step.is_some()));
         }
         let mut best = (near, f32::INFINITY);
         let to = env.metric.prepare(x);

@@ -245,50 +245,27 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                     rows.push(row);
                 }
             }
-            // Variant by variant within a leg, not seed by seed: two runs in a row on the same
-            // seed replay the same first steps, and the second ran up to 20 % faster on warm
-            // caches and branch predictors (three copies of one configuration interleaved seed
-            // by seed measured 17.8 / 15.3 / 14.6 us on bug_trap by their position). Seed 0
-            // (up to the first budget) warms each block up and is not recorded: without it the
-            // block that came first on a leg measured about 10 % slower.
+            // Variant by variant, each block after an unrecorded warm-up run (seed 0, first
+            // budget): see the module docs.
             for v in &args.variants {
                 for seed in 0..=args.seeds {
-                    let budgets = if seed == 0 {
-                        &args.budgets[..1]
-                    } else {
-                        &args.budgets[..]
+                    let run = Run {
+                        clock: args.clock,
+                        prep: &prep,
+                        v,
+                        seed,
+                        start,
+                        goal,
+                        budgets: if seed == 0 {
+                            &args.budgets[..1]
+                        } else {
+                            &args.budgets[..]
+                        },
                     };
                     let r = match args.nodes {
-                        2048 => one(
-                            args.clock,
-                            &mut arenas.n2048,
-                            &prep,
-                            v,
-                            seed,
-                            start,
-                            goal,
-                            budgets,
-                        ),
-                        4096 => one(
-                            args.clock,
-                            &mut arenas.n4096,
-                            &prep,
-                            v,
-                            seed,
-                            start,
-                            goal,
-                            budgets,
-                        ),
-                        8192 => one(
-                            args.clock,
-                            &mut arenas.n8192,
-                            &prep,
-                            v,
-                            seed,
-                            start,
-                            goal,
-                            budgets,
-                        ),
+                        2048 => run.on(&mut arenas.n2048),
+                        4096 => run.on(&mut arenas.n4096),
+                        8192 => run.on(&mut arenas.n8192),
                         n => return Err(anyhow!("--nodes {n}: use 2048, 4096 or 8192")),
                     }?;
                     if seed == 0 {
@@ -441,21 +418,28 @@ struct Arenas {
     n8192: Option<Box<Storage<8192, BUCKETS>>>,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn one<const N: usize>(
-    kind: BenchClock,
-    storage: &mut Option<Box<Storage<N, BUCKETS>>>,
-    prep: &Prepared,
-    v: &Variant,
+/// One run of the bench: a variant on a leg with a seed.
+struct Run<'a> {
+    clock: BenchClock,
+    prep: &'a Prepared,
+    v: &'a Variant,
     seed: u64,
     start: bi_am_rrt::Point,
     goal: bi_am_rrt::Point,
-    budgets: &[f64],
-) -> Result<Measured> {
-    let storage = storage.get_or_insert_with(Box::default);
-    with_planner_in::<N, _>(storage, prep, v.cfg, seed, start, |planner| {
-        measure(planner, goal, budgets, kind)
-    })
+    budgets: &'a [f64],
+}
+
+impl Run<'_> {
+    /// The run on `storage` (allocated at its first use).
+    fn on<const N: usize>(
+        &self,
+        storage: &mut Option<Box<Storage<N, BUCKETS>>>,
+    ) -> Result<Measured> {
+        let storage = storage.get_or_insert_with(Box::default);
+        with_planner_in::<N, _>(storage, self.prep, self.v.cfg, self.seed, self.start, |p| {
+            measure(p, self.goal, self.budgets, self.clock)
+        })
+    }
 }
 
 /// Grows `planner` towards `goal` until each CPU budget has passed (module docs).
