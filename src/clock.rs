@@ -461,50 +461,56 @@ mod tests {
         assert_eq!(c.0.get(), 50, "one reading per 100 units");
     }
 
-    /// A paced meter on a clock whose reading costs 500 ticks and whose work costs 10 ticks
-    /// a unit settles where a reading costs 1/128 of the work between two (u = 128 * 500 *
-    /// u / (10 u + 500): u = 6,350 units); on a clock whose reading costs 1 tick it keeps the
-    /// fewest units. Work done before the first deadline check does not matter: the meter
-    /// measures its clock when it is made.
+    /// The work counts at which a paced meter (at least 256, at most 8,192 units apart) reads
+    /// a clock whose reading costs `step` ticks and whose work costs 10 ticks a unit, over
+    /// 100,000 deadline checks of one unit each, after `work_first` units charged before the
+    /// first check.
+    fn paced_readings(step: u64, work_first: u32) -> heapless::Vec<u64, 512> {
+        let c = FakeClock::nanos().with_step(step).with_work_cost(10);
+        let origin = c.now();
+        let m = Meter::new(&c).reading_every(256).paced(8192, origin);
+        let mut at = heapless::Vec::<u64, 512>::new();
+        at.push(0).unwrap(); // the meter's own reading
+        m.charge(work_first);
+        let d = Deadline::from_ticks(origin, u64::MAX / 2);
+        for _ in 0..100_000 {
+            let before = m.last.get();
+            assert!(!m.expired(&d));
+            if m.last.get() != before {
+                at.push(m.work()).unwrap();
+            }
+            m.charge(1);
+        }
+        at
+    }
+
+    /// Checks that a costly clock's readings settle where one costs 1/128 of the work between
+    /// two (u = 128 * 500 * u / (10 u + 500): u = 6,350 units) and a cheap clock's stay at the
+    /// fewest units.
+    fn assert_paced(work_first: u32) {
+        let costly = paced_readings(500, work_first);
+        let gaps: heapless::Vec<u64, 512> = costly.windows(2).map(|w| w[1] - w[0]).collect();
+        assert!(
+            gaps[0] <= 256,
+            "the fewest units until the rate is known: {gaps:?}"
+        );
+        let settled = &gaps[3..];
+        assert!(
+            settled.iter().all(|&g| (6_300..=6_400).contains(&g)),
+            "{gaps:?}"
+        );
+        let cheap = paced_readings(1, work_first);
+        assert!(
+            cheap.windows(2).skip(1).all(|w| w[1] - w[0] == 256),
+            "{cheap:?}"
+        );
+    }
+
+    /// A paced meter spaces a costly clock's readings and keeps a cheap one's at the fewest
+    /// units; a frozen clock still ends at the work cap.
     #[test]
     fn a_paced_meter_spaces_its_readings_by_their_cost() {
-        let readings = |step: u64, work_first: u32| {
-            let c = FakeClock::nanos().with_step(step).with_work_cost(10);
-            let origin = c.now();
-            let m = Meter::new(&c).reading_every(256).paced(8192, origin);
-            let mut at = heapless::Vec::<u64, 512>::new();
-            at.push(0).unwrap(); // the meter's own reading
-            m.charge(work_first);
-            let d = Deadline::from_ticks(origin, u64::MAX / 2);
-            for _ in 0..100_000 {
-                let before = m.last.get();
-                assert!(!m.expired(&d));
-                if m.last.get() != before {
-                    at.push(m.work()).unwrap();
-                }
-                m.charge(1);
-            }
-            at
-        };
-        for work_first in [0, 100] {
-            let costly = readings(500, work_first);
-            let gaps: heapless::Vec<u64, 512> = costly.windows(2).map(|w| w[1] - w[0]).collect();
-            assert!(
-                gaps[0] <= 256,
-                "the fewest units until the rate is known: {gaps:?}"
-            );
-            let settled = &gaps[3..];
-            assert!(
-                settled.iter().all(|&g| (6_300..=6_400).contains(&g)),
-                "{gaps:?}"
-            );
-            let cheap = readings(1, work_first);
-            assert!(
-                cheap.windows(2).skip(1).all(|w| w[1] - w[0] == 256),
-                "{cheap:?}"
-            );
-        }
-        // A frozen clock: the cap still ends the loop, and readings are the most apart.
+        assert_paced(0);
         let frozen = FakeClock::nanos().with_step(0);
         let m = Meter::with_cap(&frozen, 50_000)
             .reading_every(256)
@@ -516,6 +522,14 @@ mod tests {
             checks += 1;
         }
         assert_eq!(checks, 50_000);
+    }
+
+    /// Regression (fifth round's first soak): the cost of a reading was measured only when no
+    /// work came before the first deadline check, and `plan` always anchors and follows the
+    /// agent first, so the pacing never engaged there (a CPU clock read every 256 units).
+    #[test]
+    fn regression_pacing_engages_after_work_before_the_first_check() {
+        assert_paced(100);
     }
 
     #[test]
