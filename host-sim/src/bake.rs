@@ -10,31 +10,139 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use bi_am_rrt::Point;
 use bi_am_rrt::metric::fnv1a32;
 
-use crate::diffusion::{self, DiffusionMap, Options, TableOptions};
+use crate::aggregate::{self, Aggregation, CellEdges, Coarse};
+use crate::diffusion::{self, BasisChoice, DiffusionMap, Options, TableOptions};
 use crate::graph::GridGraph;
 use crate::maps::{OwnedGrid, Scenario};
 
+/// What a diffusion map was computed on.
+pub enum Basis {
+    /// The cell graph: one node per free cell (maps of at most 65,536 free cells).
+    Cells(GridGraph),
+    /// The table's pieces ([`crate::aggregate`]): one node per table entry.
+    Pieces {
+        /// The cell graph's edges.
+        edges: CellEdges,
+        /// The pieces.
+        agg: Aggregation,
+        /// The piece graph.
+        coarse: Coarse,
+    },
+}
+
 /// A baked diffusion table with its figures.
 pub struct Baked {
-    /// The graph it was computed on.
-    pub graph: GridGraph,
-    /// The diffusion map (full precision).
+    /// What the map was computed on.
+    pub basis: Basis,
+    /// The diffusion map (full precision, one point per node of the basis).
     pub map: DiffusionMap,
     /// The table bytes.
     pub table: Vec<u8>,
 }
 
-/// Builds the graph and the diffusion map of `grid` and writes its table.
+impl Baked {
+    /// The cell graph, for bakes computed on it.
+    pub fn graph(&self) -> Option<&GridGraph> {
+        match &self.basis {
+            Basis::Cells(g) => Some(g),
+            Basis::Pieces { .. } => None,
+        }
+    }
+}
+
+/// Most free cells the diffusion map is computed on cell by cell; larger maps are computed on
+/// their table's pieces (at most as many: a table holds at most 65,536 entries).
+pub const CELL_BASIS_MAX: usize = bi_am_rrt::metric::PIECES_MAX_ENTRIES as usize;
+
+/// What a bake of `grid` will hold in memory at most, in bytes (an estimate, measured against
+/// the process's peak on the nav2 maps and a 3000 x 3000 map: within a factor of 1.5 above).
+pub fn bake_memory(grid: &OwnedGrid, free: usize, on_cells: bool) -> usize {
+    let cells = grid.width as usize * grid.height as usize;
+    if on_cells {
+        // Cell graph (20 edges of 12 bytes), rows of A2 (twice), factor and Lanczos basis.
+        free * (20 * 12 + 2 * 21 * 16 + 60 * 16 + 60 * 8) + cells * 8
+    } else {
+        cells * CellEdges::BYTES_PER_CELL + CELL_BASIS_MAX * (2 * 40 * 16 + 60 * 16 + 60 * 8)
+    }
+}
+
+/// Builds the diffusion map of `grid` and writes its table: on the cell graph when the map
+/// has at most [`CELL_BASIS_MAX`] free cells, otherwise on the pieces of the table
+/// ([`crate::aggregate`]). Refuses, naming the knob, a bake whose estimated memory exceeds
+/// `table.max_memory` or whose table cannot fit `max_bytes`. Shows a progress bar on a
+/// terminal.
 pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) -> Result<Baked> {
+    let g = grid.grid();
+    let cells = grid.width as usize * grid.height as usize;
+    let free = (0..grid.height)
+        .map(|r| (0..grid.width).filter(|&c| !g.is_occupied(c, r)).count())
+        .sum::<usize>();
+    let on_cells = match table.basis {
+        BasisChoice::Auto => free <= CELL_BASIS_MAX,
+        BasisChoice::Cells => true,
+        BasisChoice::Pieces => false,
+    };
+    let need = bake_memory(grid, free, on_cells);
+    if need > table.max_memory {
+        bail!(
+            "the bake of this {} x {} map ({free} free cells) needs about {} MiB, over the {} MiB \
+             allowed: raise --max-memory, or bake a coarser copy of the map",
+            grid.width,
+            grid.height,
+            need >> 20,
+            table.max_memory >> 20
+        );
+    }
+    let bar = indicatif::ProgressBar::new(4).with_style(
+        indicatif::ProgressStyle::with_template("bake [{elapsed}] {bar:20} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let t0 = Instant::now();
-    let graph = GridGraph::build(&grid.grid());
-    let graph_s = t0.elapsed().as_secs_f64();
-    let mut map = diffusion::diffusion_map(&graph, opts)?;
-    map.report.seconds_graph = graph_s;
-    let table = diffusion::table_bytes(&graph, &map, table)?;
-    Ok(Baked { graph, map, table })
+    let baked = if on_cells {
+        bar.set_message("cell graph");
+        let graph = GridGraph::build(&g);
+        let graph_s = t0.elapsed().as_secs_f64();
+        bar.inc(1);
+        bar.set_message(format!("diffusion map of {} cells", graph.len()));
+        let mut map = diffusion::diffusion_map(&graph, opts)?;
+        map.report.seconds_graph = graph_s;
+        bar.inc(2);
+        bar.set_message("table");
+        let table = diffusion::table_bytes(&graph, &map, table)?;
+        Baked {
+            basis: Basis::Cells(graph),
+            map,
+            table,
+        }
+    } else {
+        bar.set_message(format!("cell edges of {cells} cells"));
+        let edges = CellEdges::build(&g);
+        bar.inc(1);
+        bar.set_message("pieces");
+        let agg = table.aggregation(&edges, opts.eigenpairs - 1)?;
+        let graph_s = t0.elapsed().as_secs_f64();
+        bar.inc(1);
+        bar.set_message(format!(
+            "diffusion map of {} pieces ({} x {} cells)",
+            agg.count, agg.block, agg.block
+        ));
+        let (coarse, mut map) = aggregate::aggregated_map(&edges, &agg, opts)?;
+        map.report.seconds_graph = graph_s;
+        bar.inc(1);
+        bar.set_message("table");
+        let table = diffusion::aggregated_table_bytes(&edges, &agg, &map, table)?;
+        Baked {
+            basis: Basis::Pieces { edges, agg, coarse },
+            map,
+            table,
+        }
+    };
+    bar.finish_and_clear();
+    Ok(baked)
 }
 
 /// Rust source declaring `pub static NAME: [u8; LEN]` with the table bytes, with a
@@ -182,13 +290,33 @@ pub fn table_error(b: &Baked, pairs: usize, seed: u64) -> Result<TableError> {
     use rand_core::{Rng, SeedableRng};
     let t = bi_am_rrt::DiffusionTable::new(&b.table).map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(seed);
-    let n = b.graph.len() as u64;
+    // A random node of the basis and a position it stands for (a cell centre).
+    let mut node = || -> Option<(u32, Point)> {
+        match &b.basis {
+            Basis::Cells(g) => {
+                let i = (rng.next_u64() % g.len() as u64) as u32;
+                Some((i, g.position(i)))
+            }
+            Basis::Pieces { edges, agg, .. } => {
+                let cells = edges.cols as u64 * edges.rows as u64;
+                (0..10_000).find_map(|_| {
+                    let cell = (rng.next_u64() % cells) as usize;
+                    let p = agg.of_cell(cell)?;
+                    let (c, r) = (cell as u32 % edges.cols, cell as u32 / edges.cols);
+                    let at = |i: u32| (i as f32 + 0.5) * edges.cell;
+                    Some((p, Point::new(at(c), at(r))))
+                })
+            }
+        }
+    };
     let (mut max_abs, mut max_rel, mut max_d) = (0.0f64, 0.0f64, 0.0f64);
     let mut errs = Vec::with_capacity(pairs);
     for _ in 0..pairs {
-        let (i, j) = ((rng.next_u64() % n) as u32, (rng.next_u64() % n) as u32);
+        let (Some((i, pi)), Some((j, pj))) = (node(), node()) else {
+            bail!("no free cell found to measure the table on");
+        };
         let exact = b.map.distance(i, j);
-        let got = t.distance(b.graph.position(i), b.graph.position(j)) as f64;
+        let got = t.distance(pi, pj) as f64;
         let err = (got - exact).abs();
         errs.push(err);
         max_abs = max_abs.max(err);
@@ -357,8 +485,16 @@ pub fn diffusion_command(
     );
     println!("table: {} bytes -> {}", baked.table.len(), out.display());
     let e = table_error(&baked, 20_000, 1)?;
+    let against = match &baked.basis {
+        Basis::Cells(_) => "full precision over cell".to_string(),
+        Basis::Pieces { agg, .. } => format!(
+            "the map of its {} pieces ({} x {} blocks; the map is computed on them, so this is \
+             the quantisation) over free-cell",
+            agg.count, agg.block, agg.block
+        ),
+    };
     println!(
-        "table vs full precision over {} node pairs: max error {:.3e} (relative {:.3e}), 99th percentile {:.3e}, \
+        "table vs {against} pairs ({}): max error {:.3e} (relative {:.3e}), 99th percentile {:.3e}, \
          {:.2} % of pairs above the quantisation bound {:.3e}; largest distance {:.3e}",
         e.pairs,
         e.max_abs,

@@ -27,6 +27,7 @@ use faer::{Mat, MatMut, Side};
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 
+use crate::aggregate::{Aggregation, CellEdges};
 use crate::graph::GridGraph;
 
 /// Options of the diffusion bake.
@@ -167,7 +168,7 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
         .map(|i| graph.neighbours(i).map(|(_, w)| kernel(w)).sum())
         .collect();
     // A2 = D^-1 (A + D)/2 D^-1: off-diagonal a/(2 d_i d_j), diagonal 1/(2 d_i).
-    let mut rows: Vec<Vec<(u32, f64)>> = (0..n as u32)
+    let rows: Vec<Vec<(u32, f64)>> = (0..n as u32)
         .map(|i| {
             let di = d[i as usize];
             let mut row: Vec<(u32, f64)> = graph
@@ -178,6 +179,30 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
             row
         })
         .collect();
+    report.seconds_matrix = t0.elapsed().as_secs_f64();
+    diffusion_of(rows, n as f64, opts, report, &|src, dist| {
+        graph.dijkstra(src, dist)
+    })
+}
+
+/// Steps 2 (from `D2`) to 5 for any symmetric `A2` given as rows with the diagonal, and
+/// coordinates multiplied by `mass` (the number of map cells the nodes stand for): the cell
+/// graph's own matrix, or the aggregated one of [`crate::aggregate`]. `dijkstra(src, dist)`
+/// writes graph distances from `src` (any unit: only their correlation is used).
+pub(crate) fn diffusion_of(
+    mut rows: Vec<Vec<(u32, f64)>>,
+    mass: f64,
+    opts: &Options,
+    mut report: Report,
+    dijkstra: &(dyn Fn(u32, &mut Vec<f64>) + Sync),
+) -> Result<DiffusionMap> {
+    let n = rows.len();
+    let k = opts.eigenpairs;
+    if n <= k + 2 {
+        bail!("graph too small for {k} eigenpairs: {n} nodes");
+    }
+    report.nodes = n;
+    let t0 = Instant::now();
     let d2: Vec<f64> = rows
         .iter()
         .map(|row| row.iter().map(|&(_, v)| v).sum())
@@ -190,7 +215,7 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
     }
     let e = Sym { rows };
     report.nonzeros = e.rows.iter().map(Vec::len).sum();
-    report.seconds_matrix = t0.elapsed().as_secs_f64();
+    report.seconds_matrix += t0.elapsed().as_secs_f64();
 
     // 3: shift-invert Lanczos.
     let t1 = Instant::now();
@@ -256,10 +281,10 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
     let kept = &pairs[1..];
     let mut base = Vec::with_capacity(n * dims);
     for (i, si) in s.iter().enumerate() {
-        base.extend(kept.iter().map(|(_, v)| (n as f64) * v[i] * si));
+        base.extend(kept.iter().map(|(_, v)| mass * v[i] * si));
     }
     let lambdas: Vec<f64> = kept.iter().map(|(l, _)| *l).collect();
-    let (t, pearson) = choose_t(graph, &base, &lambdas, opts);
+    let (t, pearson) = choose_t(n, dijkstra, &base, &lambdas, opts);
     report.t = t;
     report.pearson = pearson;
     report.seconds_t = t3.elapsed().as_secs_f64();
@@ -372,8 +397,13 @@ fn lanczos_top(
 }
 
 /// Chooses `t` maximising the Pearson correlation of diffusion and graph distances.
-fn choose_t(graph: &GridGraph, base: &[f64], lambdas: &[f64], opts: &Options) -> (f64, f64) {
-    let n = graph.len();
+fn choose_t(
+    n: usize,
+    dijkstra: &(dyn Fn(u32, &mut Vec<f64>) + Sync),
+    base: &[f64],
+    lambdas: &[f64],
+    opts: &Options,
+) -> (f64, f64) {
     let dims = lambdas.len();
     let mut rng = XorShiftRng::seed_from_u64(opts.seed ^ 0x5eed);
     let mut pick = || (rng.next_u64() % n as u64) as u32;
@@ -383,12 +413,12 @@ fn choose_t(graph: &GridGraph, base: &[f64], lambdas: &[f64], opts: &Options) ->
     let mut geo = Vec::new();
     let mut diffs = Vec::new(); // squared coordinate differences per pair
     for &s in &sources {
-        graph.dijkstra(s, &mut dist);
+        dijkstra(s, &mut dist);
         for &t in &targets {
             if s == t {
                 continue;
             }
-            geo.push(dist[t as usize] * graph.cell as f64);
+            geo.push(dist[t as usize]);
             let (a, b) = (
                 &base[s as usize * dims..][..dims],
                 &base[t as usize * dims..][..dims],
@@ -480,24 +510,45 @@ pub struct TableOptions {
     /// Map cells per block along each axis (1: full resolution; 0: the smallest factor whose
     /// table fits in `max_bytes`).
     pub coarsen: u16,
-    /// Size budget of an automatically coarsened table.
+    /// Size budget of an automatically coarsened table (0: [`TableOptions::budget`]'s rule).
     pub max_bytes: usize,
     /// Layout.
     pub layout: TableLayout,
+    /// Most memory a bake may use (estimated before it starts; `bake::bake_memory`).
+    pub max_memory: usize,
+    /// What the diffusion map is computed on.
+    pub basis: BasisChoice,
 }
 
-/// The default size budget: 128 KiB, the issue's budget for the office map in firmware. A
-/// 100 x 100 map then gets a full-resolution piece table (2 x 2 blocks when it must), a
-/// 200 x 200 map 3 x 3 blocks; `bake` prints the error against full resolution.
+/// What the diffusion map is computed on (`bake::Basis`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum BasisChoice {
+    /// Cells on maps of at most 65,536 free cells, the table's pieces on larger ones.
+    #[default]
+    Auto,
+    /// Every free cell (memory and time grow with the map).
+    Cells,
+    /// The table's pieces ([`crate::aggregate`]).
+    Pieces,
+}
+
+/// The default size budget of a map of up to 65,536 cells: 128 KiB, the budget for the office
+/// map in firmware. A 100 x 100 map then gets a full-resolution piece table (2 x 2 blocks when
+/// it must), a 200 x 200 map 4 x 4 blocks; `bake` prints the error against full resolution.
 pub const DEFAULT_MAX_BYTES: usize = 128 * 1024;
+
+/// The default memory limit of a bake: 2 GiB.
+pub const DEFAULT_MAX_MEMORY: usize = 2 << 30;
 
 impl Default for TableOptions {
     fn default() -> Self {
         Self {
             kind: ElementKind::I16,
             coarsen: 0,
-            max_bytes: DEFAULT_MAX_BYTES,
+            max_bytes: 0,
             layout: TableLayout::Pieces,
+            max_memory: DEFAULT_MAX_MEMORY,
+            basis: BasisChoice::Auto,
         }
     }
 }
@@ -686,6 +737,58 @@ impl Pieces {
 }
 
 impl TableOptions {
+    /// The size budget of a table of a `cells`-cell map: `max_bytes`, or when that is 0,
+    /// 128 KiB plus what the piece map (half a byte per cell) needs beyond 32 KiB. A map of
+    /// up to 65,536 cells gets 128 KiB; a larger one keeps about 96 KiB for its entries.
+    pub fn budget(&self, cells: usize) -> usize {
+        if self.max_bytes > 0 {
+            return self.max_bytes;
+        }
+        DEFAULT_MAX_BYTES + cells.div_ceil(2).saturating_sub(32 * 1024)
+    }
+
+    /// The pieces a large map's table holds (module [`crate::aggregate`]): those of the
+    /// smallest block side whose table fits the budget, or of `coarsen` when it is set. An
+    /// error names the knob when no block side up to 64 fits.
+    pub fn aggregation(&self, edges: &CellEdges, dims: usize) -> Result<Aggregation> {
+        let (cols, rows) = (edges.cols, edges.rows);
+        let cells = cols as usize * rows as usize;
+        let budget = self.budget(cells);
+        let max_entries = bi_am_rrt::metric::PIECES_MAX_ENTRIES as usize;
+        // Entries that fit with blocks of side b (None: not even the block index fits).
+        let room = |b: u32| -> Option<usize> {
+            let blocks = (cols.div_ceil(b) * rows.div_ceil(b)) as usize;
+            let fixed = TABLE_HEADER_LEN + 4 + 2 * blocks + cells.div_ceil(2);
+            let room = budget.checked_sub(fixed)? / (dims * self.kind.size());
+            Some(room.min(max_entries))
+        };
+        let sides: Vec<u32> = if self.coarsen > 0 {
+            vec![self.coarsen as u32]
+        } else {
+            (1..=bi_am_rrt::metric::PIECES_MAX_BLOCK as u32).collect()
+        };
+        for &b in &sides {
+            let Some(limit) = room(b) else { continue };
+            // Every block holding a node holds a piece: skip sides that cannot fit.
+            if edges.nodes / (b * b) as usize > limit {
+                continue;
+            }
+            if let Some(agg) = Aggregation::of(edges, b, limit) {
+                return Ok(agg);
+            }
+        }
+        bail!(
+            "no table of this {cols} x {rows} map fits {budget} bytes (blocks of {} cells at \
+             most): raise --max-bytes{}",
+            sides.last().copied().unwrap_or(1),
+            if self.coarsen > 0 {
+                " or --coarsen"
+            } else {
+                ""
+            }
+        )
+    }
+
     /// The coarsening factor used for a graph of `cols x rows` cells with `dims` coordinates
     /// in the uniform layout.
     pub fn factor(&self, cols: u32, rows: u32, dims: usize) -> u16 {
@@ -696,9 +799,8 @@ impl TableOptions {
             TABLE_HEADER_LEN
                 + (cols.div_ceil(c) * rows.div_ceil(c)) as usize * dims * self.kind.size()
         };
-        (1..=64u32)
-            .find(|&c| size(c) <= self.max_bytes)
-            .unwrap_or(64) as u16
+        let budget = self.budget((cols * rows) as usize);
+        (1..=64u32).find(|&c| size(c) <= budget).unwrap_or(64) as u16
     }
 
     /// The entries of a graph's table: the connected pieces of `coarsen x coarsen` blocks,
@@ -709,7 +811,8 @@ impl TableOptions {
         let dims = map.dims;
         let fits = |p: &Pieces| {
             p.members.len() <= bi_am_rrt::metric::PIECES_MAX_ENTRIES as usize
-                && p.table_len(graph.cols, graph.rows, dims, self.kind.size()) <= self.max_bytes
+                && p.table_len(graph.cols, graph.rows, dims, self.kind.size())
+                    <= self.budget((graph.cols * graph.rows) as usize)
         };
         // The most precise refinement of block side `b` that fits (None if even the
         // unrefined pieces do not).
@@ -748,13 +851,56 @@ impl TableOptions {
     }
 }
 
-/// Writes the table of a diffusion map (see [`TableLayout`] for what a coarse table holds).
-pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -> Result<Vec<u8>> {
+/// The element scale of a table of `map`'s coordinates.
+fn element_scale(map: &DiffusionMap, kind: ElementKind) -> f32 {
     let max_abs = map.coords.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let scale = match opts.kind {
+    match kind {
         ElementKind::I16 => (max_abs / 32767.0).max(f64::MIN_POSITIVE) as f32,
         ElementKind::F32 => 1.0,
+    }
+}
+
+/// Writes the version-2 table of a diffusion map computed on the pieces `agg`
+/// ([`crate::aggregate`]): one entry per piece, its coordinates as computed.
+pub fn aggregated_table_bytes(
+    edges: &CellEdges,
+    agg: &Aggregation,
+    map: &DiffusionMap,
+    opts: &TableOptions,
+) -> Result<Vec<u8>> {
+    let header = TableHeader {
+        kind: opts.kind,
+        dims: map.dims as u16,
+        cols: u16::try_from(edges.cols).context("map too wide for a table")?,
+        rows: u16::try_from(edges.rows).context("map too tall for a table")?,
+        cell_size: edges.cell,
+        scale: element_scale(map, opts.kind),
+        layout: bi_am_rrt::metric::Layout::Pieces {
+            block: agg.block as u16,
+            entries: u32::try_from(agg.count).context("too many pieces")?,
+        },
     };
+    let mut out = vec![0u8; header.table_len().context("table too large")?];
+    let cols = edges.cols;
+    let written = bi_am_rrt::metric::write_piece_table(
+        &header,
+        &mut out,
+        |c, r| agg.piece[(r as u32 * cols + c as u32) as usize],
+        |e, coords| {
+            for (slot, v) in coords.iter_mut().zip(map.node(e)) {
+                *slot = *v as f32;
+            }
+            true
+        },
+    )
+    .context("writing the table: pieces and header disagree")?;
+    out.truncate(written);
+    Ok(out)
+}
+
+/// Writes the table of a diffusion map (see [`TableLayout`] for what a coarse table holds).
+pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -> Result<Vec<u8>> {
+    let scale = element_scale(map, opts.kind);
     if opts.layout == TableLayout::Pieces {
         let p = opts.pieces(graph, map);
         let header = TableHeader {

@@ -18,6 +18,8 @@
 //! (`Planner`, `Metric`, `Clock`, `DiffusionTable`, ...).
 
 #[cfg(feature = "sim")]
+pub mod aggregate;
+#[cfg(feature = "sim")]
 pub mod bake;
 #[cfg(feature = "sim")]
 pub mod bench;

@@ -371,9 +371,18 @@ struct TableArgs {
     /// --max-bytes with the smallest error).
     #[arg(long, default_value_t = 0)]
     coarsen: u16,
-    /// Diffusion table: size budget in bytes when --coarsen is 0.
-    #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_BYTES)]
+    /// Diffusion table: size budget in bytes when --coarsen is 0 (0: 128 KiB, plus the piece
+    /// map's half byte per cell beyond 32 KiB on maps over 65,536 cells).
+    #[arg(long, default_value_t = 0)]
     max_bytes: usize,
+    /// Diffusion bake: most memory it may use, in MiB (estimated before it starts; a larger
+    /// bake is refused with its estimate).
+    #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_MEMORY >> 20)]
+    max_memory: usize,
+    /// Diffusion bake: compute the map on every free cell (`cells`), on the table's pieces
+    /// (`pieces`), or `auto` (cells up to 65,536 free cells, pieces above).
+    #[arg(long, value_enum, default_value = "auto")]
+    basis: host_sim::diffusion::BasisChoice,
     /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
     /// never across a wall) or `uniform` (one entry per block, the format-1 table).
     #[arg(long, value_enum, default_value = "pieces")]
@@ -387,6 +396,8 @@ impl TableArgs {
             coarsen: self.coarsen,
             max_bytes: self.max_bytes,
             layout: self.layout,
+            max_memory: self.max_memory << 20,
+            basis: self.basis,
         }
     }
 }

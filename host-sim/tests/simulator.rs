@@ -851,3 +851,49 @@ fn docs_results_is_the_report_of_its_data() {
         "docs/results.md is stale: regenerate it with {command}"
     );
 }
+
+/// Issue 23: a map computed on its table's pieces agrees with the one computed on every cell.
+/// On office (baked both ways; the pieces of the default 128 KiB budget), the two tables'
+/// distances over random free-cell pairs correlate (Pearson) at 0.98 or more, and both
+/// correlate with graph distance as well (within 0.03).
+#[test]
+fn a_map_baked_on_its_pieces_agrees_with_the_cell_bake() {
+    use bi_am_rrt::Metric;
+    use host_sim::diffusion::BasisChoice;
+    use rand_core::{Rng, SeedableRng};
+    let Some(file) = shared_maps() else { return };
+    let sc = maps::load_scenarios(&file, Some(&["office".into()]))
+        .unwrap()
+        .remove(0);
+    let bake = |basis| {
+        let o = TableOptions {
+            basis,
+            ..TableOptions::default()
+        };
+        host_sim::bake::bake_diffusion(&sc.map, &Options::default(), &o).unwrap()
+    };
+    let (cells, pieces) = (bake(BasisChoice::Cells), bake(BasisChoice::Pieces));
+    let (tc, tp) = (
+        bi_am_rrt::DiffusionTable::new(&cells.table).unwrap(),
+        bi_am_rrt::DiffusionTable::new(&pieces.table).unwrap(),
+    );
+    let graph = cells.graph().unwrap();
+    let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(5);
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for _ in 0..20_000 {
+        let n = graph.len() as u64;
+        let (i, j) = ((rng.next_u64() % n) as u32, (rng.next_u64() % n) as u32);
+        let (pi, pj) = (graph.position(i), graph.position(j));
+        a.push(tc.distance(pi, pj) as f64);
+        b.push(tp.distance(pi, pj) as f64);
+    }
+    let r = host_sim::diffusion::pearson(&a, &b);
+    let (rc, rp) = (cells.map.report.pearson, pieces.map.report.pearson);
+    eprintln!(
+        "office: {} pieces, Pearson(cells table, pieces table) {r:.4}; with graph distance \
+         {rc:.4} (cells) {rp:.4} (pieces)",
+        pieces.map.report.nodes
+    );
+    assert!(r >= 0.98, "{r}");
+    assert!((rc - rp).abs() <= 0.03, "{rc} vs {rp}");
+}
