@@ -31,6 +31,7 @@ fn checks() -> Result<u32, &'static str> {
         (2, u16::MAX, u16::MAX, ElementKind::I16),
     ] {
         let h = TableHeader {
+            map_hash: None,
             kind,
             dims,
             cols,
@@ -47,6 +48,7 @@ fn checks() -> Result<u32, &'static str> {
     }
     // An 8 GiB payload does not fit a 32-bit usize.
     let huge = TableHeader {
+        map_hash: None,
         kind: ElementKind::F32,
         dims: 32,
         cols: 8192,
@@ -61,6 +63,7 @@ fn checks() -> Result<u32, &'static str> {
     passed += 1;
     // A real table reads back.
     let h = TableHeader {
+        map_hash: None,
         kind: ElementKind::I16,
         dims: 2,
         cols: 4,

@@ -98,6 +98,9 @@ pub enum SetupError {
     /// about 1e19 m), or vanish at the duplicate scale (cells under about 1e-15 m), or the
     /// spatial index cannot cover it.
     Map,
+    /// The metric was not made for this map: a diffusion table baked from another grid
+    /// (`DiffusionTable::check_map`).
+    Metric(crate::metric::TableError),
 }
 
 impl core::fmt::Display for SetupError {
@@ -105,6 +108,7 @@ impl core::fmt::Display for SetupError {
         match self {
             Self::Config(e) => write!(f, "bad configuration: {e}"),
             Self::Start(e) => write!(f, "bad start: {e}"),
+            Self::Metric(e) => write!(f, "metric does not fit the map: {e}"),
             Self::Map => {
                 f.write_str("map scale out of range: squared distances overflow or vanish in f32")
             }

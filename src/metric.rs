@@ -11,19 +11,19 @@
 //! A metric returns `f32::INFINITY` for a position it cannot place (an obstacle, outside the
 //! map, a region cut off from the main free component).
 //!
-//! # Table format (versions 1 and 2)
+//! # Table format (versions 1 to 3)
 //!
 //! Little-endian throughout. A 32-byte header, then the payload:
 //!
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `b"BIAMDIFF"` |
-//! | 8 | 2 | format version (1: uniform, 2: pieces) |
+//! | 8 | 2 | format version (1: uniform, 2: pieces, 3: pieces bound to a map) |
 //! | 10 | 2 | element kind: 1 = `i16` quantised, 2 = `f32` |
 //! | 12 | 2 | dimensions `k` (1..=32) |
-//! | 14 | 2 | columns (v1: table cells; v2: map cells) |
+//! | 14 | 2 | columns (v1: table cells; v2, v3: map cells) |
 //! | 16 | 2 | rows (likewise) |
-//! | 18 | 2 | v1: 0; v2: block side `b` in cells (1..=64) |
+//! | 18 | 2 | v1: 0; v2, v3: block side `b` in cells (1..=64) |
 //! | 20 | 4 | cell size in metres (`f32`, finite, positive) |
 //! | 24 | 4 | scale (`f32`): coordinate = element * scale |
 //! | 28 | 4 | FNV-1a 32-bit hash of the payload |
@@ -40,8 +40,15 @@
 //! within the block, 1..=15, or 0 for none; then the `E` entries of `k` elements. Cell
 //! `(col, row)` with piece `q > 0` reads entry `first[block] + q - 1`.
 //!
-//! In both, an entry whose first element is `i16::MIN` (kind 1) or NaN (kind 2) is
-//! unreachable, as is a v2 cell of piece 0.
+//! **Version 3 (pieces, bound to a map).** Version 2 whose payload opens with one more `u32`:
+//! the FNV-1a hash of the packed occupancy grid the table was baked from (the
+//! `OccupancyGrid::bytes_needed` bytes of `map::pack_grid`'s layout), then the version-2
+//! payload. `DiffusionTable::check_map` (which `Planner::new` calls through
+//! `Metric::check_map`) refuses a grid of another size or cell size (every version) or, for
+//! version 3, other contents, with `TableError::WrongMap`.
+//!
+//! In all, an entry whose first element is `i16::MIN` (kind 1) or NaN (kind 2) is
+//! unreachable, as is a v2/v3 cell of piece 0.
 
 use crate::geometry::Point;
 use crate::slots::{cell_index, sat_u32, to_u16};
@@ -63,6 +70,13 @@ pub trait Metric {
     /// on a cache miss) reports it here so that a virtual clock stays faithful. Default: 0.
     fn take_work(&self) -> u32 {
         0
+    }
+
+    /// Whether the metric was made for `grid` (a table baked from it). `Planner::new` refuses
+    /// a metric that was not. Default: any grid.
+    fn check_map(&self, grid: &crate::map::OccupancyGrid<'_>) -> Result<(), TableError> {
+        let _ = grid;
+        Ok(())
     }
 
     /// One end of many distance queries, resolved once: the planner measures a whole tree, a
@@ -109,6 +123,9 @@ impl<M: Metric + ?Sized> Metric for &M {
     fn take_work(&self) -> u32 {
         (**self).take_work()
     }
+    fn check_map(&self, grid: &crate::map::OccupancyGrid<'_>) -> Result<(), TableError> {
+        (**self).check_map(grid)
+    }
     fn prepare(&self, p: Point) -> Prepared {
         (**self).prepare(p)
     }
@@ -145,6 +162,9 @@ pub enum TableError {
     BadHeader,
     /// The payload does not match its checksum.
     BadChecksum,
+    /// The table was baked from another map than the one it is used with
+    /// ([`DiffusionTable::check_map`]).
+    WrongMap,
 }
 
 impl core::fmt::Display for TableError {
@@ -155,6 +175,9 @@ impl core::fmt::Display for TableError {
             Self::UnsupportedVersion => "unsupported table version",
             Self::BadHeader => "table header out of range",
             Self::BadChecksum => "table checksum mismatch",
+            Self::WrongMap => {
+                "the table was baked from another map (its size, cell size or contents differ)"
+            }
         })
     }
 }
@@ -163,8 +186,9 @@ impl core::error::Error for TableError {}
 
 /// Magic bytes at the start of a diffusion table.
 pub const TABLE_MAGIC: [u8; 8] = *b"BIAMDIFF";
-/// The newest table format version this build reads and writes (it reads version 1 too).
-pub const TABLE_VERSION: u16 = 2;
+/// The newest table format version this build reads and writes (it reads versions 1 and 2
+/// too).
+pub const TABLE_VERSION: u16 = 3;
 /// Header size in bytes.
 pub const TABLE_HEADER_LEN: usize = 32;
 /// Most dimensions a table may have.
@@ -222,6 +246,10 @@ pub struct TableHeader {
     pub scale: f32,
     /// How positions map to entries.
     pub layout: Layout,
+    /// FNV-1a 32-bit hash of the packed occupancy grid the table was baked from (version 3:
+    /// a pieces table bound to its map, checked by [`DiffusionTable::check_map`]); `None` in
+    /// versions 1 and 2.
+    pub map_hash: Option<u32>,
 }
 
 /// How a table maps positions to its entries (module docs).
@@ -272,7 +300,8 @@ impl TableHeader {
         let block_cols = cols.div_ceil(b);
         let blocks = block_cols.checked_mul(rows.div_ceil(b))?;
         let nibble_bytes = cols.checked_mul(rows)?.div_ceil(2);
-        let firsts_at: u32 = 4;
+        // Version 3 opens with the map's hash, then the entry count.
+        let firsts_at: u32 = if self.map_hash.is_some() { 8 } else { 4 };
         let nibbles_at = firsts_at.checked_add(blocks.checked_mul(2)?)?;
         let coords_at = nibbles_at.checked_add(nibble_bytes)?;
         Some(PieceParts {
@@ -316,9 +345,10 @@ impl TableHeader {
 impl TableHeader {
     /// The format version of this layout.
     pub const fn version(&self) -> u16 {
-        match self.layout {
-            Layout::Uniform => 1,
-            Layout::Pieces { .. } => 2,
+        match (self.layout, self.map_hash) {
+            (Layout::Uniform, _) => 1,
+            (Layout::Pieces { .. }, None) => 2,
+            (Layout::Pieces { .. }, Some(_)) => 3,
         }
     }
 
@@ -396,7 +426,7 @@ impl<'a> DiffusionTable<'a> {
         }
         let field = |at| le_u16(head, at).ok_or(TableError::Truncated);
         let version = field(8)?;
-        if version != 1 && version != 2 {
+        if !(1..=3).contains(&version) {
             return Err(TableError::UnsupportedVersion);
         }
         let kind = match field(10)? {
@@ -431,14 +461,21 @@ impl<'a> DiffusionTable<'a> {
             if block == 0 || block > PIECES_MAX_BLOCK {
                 return Err(TableError::BadHeader);
             }
+            let at = if version == 3 { 4 } else { 0 };
             let entries = bytes
                 .get(TABLE_HEADER_LEN..)
-                .and_then(|p| le_u32(p, 0))
+                .and_then(|p| le_u32(p, at))
                 .ok_or(TableError::Truncated)?;
             if entries > PIECES_MAX_ENTRIES {
                 return Err(TableError::BadHeader);
             }
             Layout::Pieces { block, entries }
+        };
+        let map_hash = if version == 3 {
+            let hash = bytes.get(TABLE_HEADER_LEN..).and_then(|p| le_u32(p, 0));
+            Some(hash.ok_or(TableError::Truncated)?)
+        } else {
+            None
         };
         let header = TableHeader {
             kind,
@@ -448,6 +485,7 @@ impl<'a> DiffusionTable<'a> {
             cell_size,
             scale,
             layout,
+            map_hash,
         };
         // A payload larger than the address space cannot be present: truncated.
         let end = header.table_len().ok_or(TableError::Truncated)?;
@@ -468,6 +506,40 @@ impl<'a> DiffusionTable<'a> {
             parts,
             inv_cell: 1.0 / cell_size,
         })
+    }
+
+    /// Whether this table was baked from `grid`: the same cell size and extent (in table
+    /// cells for version 1) and, for a version-3 table, the same grid bytes (their FNV-1a
+    /// hash: one pass over the packed grid). `Planner::new` checks it through
+    /// [`Metric::check_map`].
+    pub fn check_map(&self, grid: &crate::map::OccupancyGrid<'_>) -> Result<(), TableError> {
+        let h = &self.header;
+        let (cols, rows) = match h.layout {
+            Layout::Pieces { .. } => (grid.cols(), grid.rows()),
+            Layout::Uniform => {
+                // Table cells are whole multiples of the map's.
+                let ratio = libm::roundf(h.cell_size / grid.cell_size());
+                let c = sat_u32(ratio).max(1);
+                let up = |n: u16| to_u16(u32::from(n).div_ceil(c));
+                (up(grid.cols()), up(grid.rows()))
+            }
+        };
+        let cell_ok = match h.layout {
+            Layout::Pieces { .. } => h.cell_size == grid.cell_size(),
+            Layout::Uniform => {
+                let ratio = h.cell_size / grid.cell_size();
+                libm::fabsf(ratio - libm::roundf(ratio)) <= 1e-3 * ratio && ratio >= 0.999
+            }
+        };
+        let hash_ok = h.map_hash.is_none_or(|m| {
+            let n = crate::map::OccupancyGrid::bytes_needed(grid.cols(), grid.rows());
+            grid.bits().get(..n).is_some_and(|b| fnv1a32(b) == m)
+        });
+        if cell_ok && hash_ok && (h.cols, h.rows) == (cols, rows) {
+            Ok(())
+        } else {
+            Err(TableError::WrongMap)
+        }
     }
 
     /// The validated header.
@@ -636,6 +708,9 @@ impl DiffusionTable<'_> {
 }
 
 impl Metric for DiffusionTable<'_> {
+    fn check_map(&self, grid: &crate::map::OccupancyGrid<'_>) -> Result<(), TableError> {
+        DiffusionTable::check_map(self, grid)
+    }
     fn distance(&self, a: Point, b: Point) -> f32 {
         match (self.placed(a), self.placed(b)) {
             (Some(ca), Some(cb)) => self.entry_distance(ca, cb),
@@ -734,7 +809,7 @@ pub fn write_table<F>(header: &TableHeader, out: &mut [u8], mut coords: F) -> Op
 where
     F: FnMut(u16, u16, &mut [f32]) -> bool,
 {
-    if header.layout != Layout::Uniform {
+    if header.layout != Layout::Uniform || header.map_hash.is_some() {
         return None;
     }
     let (head, payload) = table_parts(header, out)?;
@@ -773,7 +848,14 @@ where
         return None;
     };
     let (head, payload) = table_parts(header, out)?;
-    copy_bytes(payload.get_mut(..4)?, &entries.to_le_bytes());
+    let count_at = match header.map_hash {
+        Some(hash) => {
+            copy_bytes(payload.get_mut(..4)?, &hash.to_le_bytes());
+            4..8
+        }
+        None => 0..4,
+    };
+    copy_bytes(payload.get_mut(count_at)?, &entries.to_le_bytes());
     let (cols, rows, b) = (u32::from(header.cols), u32::from(header.rows), parts.block);
     let mut next: u32 = 0;
     for br in 0..rows.div_ceil(b) {
@@ -828,6 +910,7 @@ mod tests {
 
     fn header(kind: ElementKind) -> TableHeader {
         TableHeader {
+            map_hash: None,
             kind,
             dims: 2,
             cols: 3,
@@ -862,6 +945,7 @@ mod tests {
         };
         for kind in [ElementKind::I16, ElementKind::F32] {
             let h = TableHeader {
+                map_hash: None,
                 kind,
                 dims: 2,
                 cols: 4,
@@ -888,6 +972,7 @@ mod tests {
             assert!(!t.covers(Point::new(2.5, 1.5)) && t.covers(Point::new(2.5, 0.5)));
             // Disagreements are refused: a wrong entry count, a piece above 15.
             let wrong = TableHeader {
+                map_hash: None,
                 layout: Layout::Pieces {
                     block: 2,
                     entries: 4,
@@ -988,6 +1073,7 @@ mod tests {
     #[test]
     fn regression_table_size_overflow_is_refused() {
         let claims = TableHeader {
+            map_hash: None,
             kind: ElementKind::F32,
             dims: 32,
             cols: 8192,
@@ -1007,6 +1093,7 @@ mod tests {
             usize::try_from(expected).ok().map(|n| n as u64)
         );
         let largest = TableHeader {
+            map_hash: None,
             cols: u16::MAX,
             rows: u16::MAX,
             ..claims

@@ -237,6 +237,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             return Err(SetupError::Map);
         }
         map.check_point(start)?;
+        metric.check_map(map.grid()).map_err(SetupError::Metric)?;
         let side = cfg.e_max.max(map.grid().cell_size());
         let Storage { forward, reverse } = storage;
         for store in [&mut *forward, &mut *reverse] {

@@ -397,3 +397,87 @@ fn tiny_capacities_stay_valid() {
         arrived[0], arrived[1]
     );
 }
+
+/// Issue 23, case 5: a table baked from a 150 x 150 grid was accepted with a 200 x 200 grid,
+/// and goals outside its area were refused with a misleading `Unreachable`. Now the planner
+/// refuses a table of another size or cell (every version), and a version-3 table of another
+/// grid of the same size (its recorded hash), with `SetupError::Metric(WrongMap)`.
+#[test]
+fn regression_a_table_of_another_map_is_refused() {
+    use bi_am_rrt::metric::{ElementKind, Layout, TableError, TableHeader, fnv1a32};
+    let grid = |n: u16, wall: u16| {
+        let mut bits = vec![0u8; OccupancyGrid::bytes_needed(n, n)];
+        bi_am_rrt::map::pack_grid(&mut bits, n, n, |c, r| c == wall && r > 2).unwrap();
+        bits
+    };
+    // A one-block-per-cell pieces table (every free cell its own entry) of `bits`.
+    let table = |bits: &[u8], n: u16, stamp: bool| {
+        let g = OccupancyGrid::new(bits, n, n, 1.0).unwrap();
+        let free = |c: u16, r: u16| !g.is_occupied(c, r);
+        let entries = (0..n)
+            .flat_map(|r| (0..n).map(move |c| (c, r)))
+            .filter(|&(c, r)| free(c, r))
+            .count() as u32;
+        let header = TableHeader {
+            kind: ElementKind::F32,
+            dims: 2,
+            cols: n,
+            rows: n,
+            cell_size: 1.0,
+            scale: 1.0,
+            layout: Layout::Pieces { block: 1, entries },
+            map_hash: stamp.then(|| fnv1a32(bits)),
+        };
+        let mut out = vec![0u8; header.table_len().unwrap()];
+        let cells: Vec<(u16, u16)> = (0..n)
+            .flat_map(|r| (0..n).map(move |c| (c, r)))
+            .filter(|&(c, r)| free(c, r))
+            .collect();
+        bi_am_rrt::metric::write_piece_table(
+            &header,
+            &mut out,
+            |c, r| u8::from(free(c, r)),
+            |e, xy| {
+                let (c, r) = cells[e as usize];
+                xy[0] = c as f32;
+                xy[1] = r as f32;
+                true
+            },
+        )
+        .unwrap();
+        out
+    };
+    let try_plan = |grid_bits: &[u8], n: u16, table_bytes: &[u8]| {
+        let mut storage: Box<Storage<64, 16>> = Box::default();
+        let t = DiffusionTable::new(table_bytes).unwrap();
+        let g = OccupancyGrid::new(grid_bits, n, n, 1.0).unwrap();
+        let cfg = Config::bi_am_rrt(MetricKind::Diffusion);
+        Planner::<_, _, 64, 16, K>::new(
+            &mut storage,
+            Map::new(g),
+            t,
+            XorShiftRng::seed_from_u64(1),
+            cfg,
+            Point::new(1.5, 1.5),
+        )
+        .map(|_| ())
+    };
+    let small = grid(150, 70);
+    let big = grid(200, 70);
+    let wrong = Err(SetupError::Metric(TableError::WrongMap));
+    // Another size: refused, stamped (version 3) or not (version 2).
+    for stamp in [false, true] {
+        let t = table(&small, 150, stamp);
+        assert_eq!(try_plan(&big, 200, &t), wrong, "stamp {stamp}");
+        assert_eq!(try_plan(&small, 150, &t), Ok(()), "stamp {stamp}");
+    }
+    // The same size, another wall: only the version-3 table can tell.
+    let other = grid(150, 90);
+    assert_eq!(try_plan(&other, 150, &table(&small, 150, true)), wrong);
+    assert_eq!(try_plan(&other, 150, &table(&small, 150, false)), Ok(()));
+    // A version-1 table of the 150 x 150 grid's size (landmarks) on the 200 x 200 one.
+    let g = OccupancyGrid::new(&small, 150, 150, 1.0).unwrap();
+    let v1 = landmark_table(&g, 2);
+    assert_eq!(try_plan(&small, 150, &v1), Ok(()));
+    assert_eq!(try_plan(&big, 200, &v1), wrong);
+}

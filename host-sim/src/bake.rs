@@ -96,6 +96,14 @@ pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) ->
             table.max_memory >> 20
         );
     }
+    // The table records the grid it was baked from.
+    let n = bi_am_rrt::map::OccupancyGrid::bytes_needed(grid.width, grid.height);
+    let table = &TableOptions {
+        map_hash: Some(fnv1a32(
+            grid.bits.get(..n).context("grid shorter than its size")?,
+        )),
+        ..*table
+    };
     let bar = indicatif::ProgressBar::new(4).with_style(
         indicatif::ProgressStyle::with_template("bake [{elapsed}] {bar:20} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),

@@ -518,6 +518,9 @@ pub struct TableOptions {
     pub max_memory: usize,
     /// What the diffusion map is computed on.
     pub basis: BasisChoice,
+    /// The hash of the map's packed grid, recorded in a pieces table (version 3: the table
+    /// is bound to its map); `bake::bake_diffusion` sets it.
+    pub map_hash: Option<u32>,
 }
 
 /// What the diffusion map is computed on (`bake::Basis`).
@@ -549,6 +552,7 @@ impl Default for TableOptions {
             layout: TableLayout::Pieces,
             max_memory: DEFAULT_MAX_MEMORY,
             basis: BasisChoice::Auto,
+            map_hash: None,
         }
     }
 }
@@ -869,6 +873,7 @@ pub fn aggregated_table_bytes(
     opts: &TableOptions,
 ) -> Result<Vec<u8>> {
     let header = TableHeader {
+        map_hash: None,
         kind: opts.kind,
         dims: map.dims as u16,
         cols: u16::try_from(edges.cols).context("map too wide for a table")?,
@@ -904,6 +909,7 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
     if opts.layout == TableLayout::Pieces {
         let p = opts.pieces(graph, map);
         let header = TableHeader {
+            map_hash: None,
             kind: opts.kind,
             dims: map.dims as u16,
             cols: u16::try_from(graph.cols).context("map too wide for a table")?,
@@ -938,6 +944,7 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
     let cols = graph.cols.div_ceil(c) as u16;
     let rows = graph.rows.div_ceil(c) as u16;
     let header = TableHeader {
+        map_hash: None,
         kind: opts.kind,
         dims: map.dims as u16,
         cols,

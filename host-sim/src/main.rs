@@ -398,6 +398,7 @@ impl TableArgs {
             layout: self.layout,
             max_memory: self.max_memory << 20,
             basis: self.basis,
+            map_hash: None,
         }
     }
 }

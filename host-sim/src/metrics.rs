@@ -126,6 +126,16 @@ impl Metric for AnyMetric<'_> {
         matches!(self, Self::Euclidean)
     }
 
+    fn check_map(
+        &self,
+        grid: &bi_am_rrt::map::OccupancyGrid<'_>,
+    ) -> Result<(), bi_am_rrt::metric::TableError> {
+        match self {
+            Self::Diffusion(t) => t.check_map(grid),
+            _ => Ok(()),
+        }
+    }
+
     fn take_work(&self) -> u32 {
         match self {
             Self::Geodesic(g) => g.take_work(),

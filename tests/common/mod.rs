@@ -131,6 +131,7 @@ pub fn landmark_table(g: &OccupancyGrid<'_>, k: usize) -> Vec<u8> {
     }
     let norm = 1.0 / (k as f32).sqrt();
     let header = TableHeader {
+        map_hash: None,
         kind: ElementKind::I16,
         dims: k as u16,
         cols: g.cols(),

@@ -114,6 +114,7 @@ pub fn run(data: &[u8]) -> Result<(), String> {
 /// cells whose noise byte is 0 are unreachable.
 fn table_from_bytes(grid: &OccupancyGrid<'_>, b: &mut Bytes<'_>) -> Vec<u8> {
     let header = TableHeader {
+        map_hash: None,
         kind: if b.u8().is_multiple_of(2) {
             ElementKind::I16
         } else {

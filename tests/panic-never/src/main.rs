@@ -90,6 +90,7 @@ fn main() -> ! {
         sink ^= g.cell_of(point()).map_or(0, |(c, _)| c as u32);
         // Tables: written, read back, and read from opaque bytes.
         let header = black_box(TableHeader {
+            map_hash: None,
             kind: ElementKind::I16,
             dims: 2,
             cols: 20,
