@@ -741,6 +741,11 @@ impl Pieces {
 }
 
 impl TableOptions {
+    /// Bytes the map's hash adds to a pieces table (version 3).
+    fn stamp_len(&self) -> usize {
+        if self.map_hash.is_some() { 4 } else { 0 }
+    }
+
     /// The size budget of a table of a `cells`-cell map: `max_bytes`, or when that is 0,
     /// 128 KiB plus what the piece map (half a byte per cell) needs beyond 32 KiB. A map of
     /// up to 65,536 cells gets 128 KiB; a larger one keeps about 96 KiB for its entries.
@@ -762,7 +767,7 @@ impl TableOptions {
         // Entries that fit with blocks of side b (None: not even the block index fits).
         let room = |b: u32| -> Option<usize> {
             let blocks = (cols.div_ceil(b) * rows.div_ceil(b)) as usize;
-            let fixed = TABLE_HEADER_LEN + 4 + 2 * blocks + cells.div_ceil(2);
+            let fixed = TABLE_HEADER_LEN + 4 + self.stamp_len() + 2 * blocks + cells.div_ceil(2);
             let room = budget.checked_sub(fixed)? / (dims * self.kind.size());
             Some(room.min(max_entries))
         };
@@ -815,7 +820,7 @@ impl TableOptions {
         let dims = map.dims;
         let fits = |p: &Pieces| {
             p.members.len() <= bi_am_rrt::metric::PIECES_MAX_ENTRIES as usize
-                && p.table_len(graph.cols, graph.rows, dims, self.kind.size())
+                && p.table_len(graph.cols, graph.rows, dims, self.kind.size()) + self.stamp_len()
                     <= self.budget((graph.cols * graph.rows) as usize)
         };
         // The most precise refinement of block side `b` that fits (None if even the
@@ -864,7 +869,33 @@ fn element_scale(map: &DiffusionMap, kind: ElementKind) -> f32 {
     }
 }
 
-/// Writes the version-2 table of a diffusion map computed on the pieces `agg`
+impl TableOptions {
+    /// The header of a pieces table (version 3 with `map_hash`, else 2) of `map` on a map of
+    /// `(cols, rows, cell)` in blocks of `block` cells with `entries` entries.
+    fn piece_header(
+        &self,
+        map: &DiffusionMap,
+        (cols, rows, cell): (u32, u32, f32),
+        block: u32,
+        entries: usize,
+    ) -> Result<TableHeader> {
+        Ok(TableHeader {
+            map_hash: self.map_hash,
+            kind: self.kind,
+            dims: map.dims as u16,
+            cols: u16::try_from(cols).context("map too wide for a table")?,
+            rows: u16::try_from(rows).context("map too tall for a table")?,
+            cell_size: cell,
+            scale: element_scale(map, self.kind),
+            layout: bi_am_rrt::metric::Layout::Pieces {
+                block: block as u16,
+                entries: u32::try_from(entries).context("too many pieces")?,
+            },
+        })
+    }
+}
+
+/// Writes the pieces table (version 3 when `opts.map_hash` is set) of a diffusion map computed on the pieces `agg`
 /// ([`crate::aggregate`]): one entry per piece, its coordinates as computed.
 pub fn aggregated_table_bytes(
     edges: &CellEdges,
@@ -872,19 +903,8 @@ pub fn aggregated_table_bytes(
     map: &DiffusionMap,
     opts: &TableOptions,
 ) -> Result<Vec<u8>> {
-    let header = TableHeader {
-        map_hash: None,
-        kind: opts.kind,
-        dims: map.dims as u16,
-        cols: u16::try_from(edges.cols).context("map too wide for a table")?,
-        rows: u16::try_from(edges.rows).context("map too tall for a table")?,
-        cell_size: edges.cell,
-        scale: element_scale(map, opts.kind),
-        layout: bi_am_rrt::metric::Layout::Pieces {
-            block: agg.block as u16,
-            entries: u32::try_from(agg.count).context("too many pieces")?,
-        },
-    };
+    let shape = (edges.cols, edges.rows, edges.cell);
+    let header = opts.piece_header(map, shape, agg.block, agg.count)?;
     let mut out = vec![0u8; header.table_len().context("table too large")?];
     let cols = edges.cols;
     let written = bi_am_rrt::metric::write_piece_table(
@@ -908,19 +928,8 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
     let scale = element_scale(map, opts.kind);
     if opts.layout == TableLayout::Pieces {
         let p = opts.pieces(graph, map);
-        let header = TableHeader {
-            map_hash: None,
-            kind: opts.kind,
-            dims: map.dims as u16,
-            cols: u16::try_from(graph.cols).context("map too wide for a table")?,
-            rows: u16::try_from(graph.rows).context("map too tall for a table")?,
-            cell_size: graph.cell,
-            scale,
-            layout: bi_am_rrt::metric::Layout::Pieces {
-                block: p.block as u16,
-                entries: u32::try_from(p.members.len()).context("too many pieces")?,
-            },
-        };
+        let shape = (graph.cols, graph.rows, graph.cell);
+        let header = opts.piece_header(map, shape, p.block, p.members.len())?;
         let mut out = vec![0u8; header.table_len().context("table too large")?];
         let cols = graph.cols;
         let written = bi_am_rrt::metric::write_piece_table(
