@@ -452,5 +452,11 @@ mod tests {
         let b = bake_diffusion(&g, &Options::default(), &TableOptions::default()).unwrap();
         assert!(matches!(b.basis, crate::bake::Basis::Pieces { .. }));
         assert!(b.table.len() <= TableOptions::default().budget(160_000));
+        // The table is bound to the grid it was baked from (version 3).
+        let t = DiffusionTable::new(&b.table).unwrap();
+        assert!(t.header().map_hash.is_some());
+        assert!(t.check_map(&g.grid()).is_ok());
+        let other = OwnedGrid::from_fn(400, 400, 0.05, |c, r| c % 50 == 1 && r % 7 != 0).unwrap();
+        assert!(t.check_map(&other.grid()).is_err());
     }
 }
