@@ -904,19 +904,42 @@ pub fn aggregated_table_bytes(
     opts: &TableOptions,
 ) -> Result<Vec<u8>> {
     let shape = (edges.cols, edges.rows, edges.cell);
-    let header = opts.piece_header(map, shape, agg.block, agg.count)?;
-    let mut out = vec![0u8; header.table_len().context("table too large")?];
-    let cols = edges.cols;
-    let written = bi_am_rrt::metric::write_piece_table(
-        &header,
-        &mut out,
-        |c, r| agg.piece[(r as u32 * cols + c as u32) as usize],
+    piece_table(
+        opts,
+        map,
+        shape,
+        agg.block,
+        &agg.piece,
+        agg.count,
         |e, coords| {
             for (slot, v) in coords.iter_mut().zip(map.node(e)) {
                 *slot = *v as f32;
             }
             true
         },
+    )
+}
+
+/// Writes a pieces table of `map` ([`TableOptions::piece_header`]): `piece` gives each map
+/// cell's piece in its block, `coords(entry, out)` each entry's coordinates (false:
+/// unreachable).
+fn piece_table(
+    opts: &TableOptions,
+    map: &DiffusionMap,
+    shape: (u32, u32, f32),
+    block: u32,
+    piece: &[u8],
+    entries: usize,
+    coords: impl FnMut(u32, &mut [f32]) -> bool,
+) -> Result<Vec<u8>> {
+    let header = opts.piece_header(map, shape, block, entries)?;
+    let mut out = vec![0u8; header.table_len().context("table too large")?];
+    let cols = shape.0;
+    let written = bi_am_rrt::metric::write_piece_table(
+        &header,
+        &mut out,
+        |c, r| piece[(r as u32 * cols + c as u32) as usize],
+        coords,
     )
     .context("writing the table: pieces and header disagree")?;
     out.truncate(written);
@@ -929,25 +952,15 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
     if opts.layout == TableLayout::Pieces {
         let p = opts.pieces(graph, map);
         let shape = (graph.cols, graph.rows, graph.cell);
-        let header = opts.piece_header(map, shape, p.block, p.members.len())?;
-        let mut out = vec![0u8; header.table_len().context("table too large")?];
-        let cols = graph.cols;
-        let written = bi_am_rrt::metric::write_piece_table(
-            &header,
-            &mut out,
-            |c, r| p.piece[(r as u32 * cols + c as u32) as usize],
-            |e, coords| {
-                // The entry's mean coordinates: the point nearest all of its cells.
-                let nodes = &p.members[e as usize];
-                for (slot, v) in coords.iter_mut().zip(Pieces::mean(map, nodes)) {
-                    *slot = v as f32;
-                }
-                !nodes.is_empty()
-            },
-        )
-        .context("writing the table")?;
-        out.truncate(written);
-        return Ok(out);
+        let entries = p.members.len();
+        return piece_table(opts, map, shape, p.block, &p.piece, entries, |e, coords| {
+            // The entry's mean coordinates: the point nearest all of its cells.
+            let nodes = &p.members[e as usize];
+            for (slot, v) in coords.iter_mut().zip(Pieces::mean(map, nodes)) {
+                *slot = v as f32;
+            }
+            !nodes.is_empty()
+        });
     }
     let c = opts.factor(graph.cols, graph.rows, map.dims) as u32;
     let cols = graph.cols.div_ceil(c) as u16;
