@@ -177,7 +177,8 @@ pub struct Config {
     /// edges) a node this far along it becomes the root instead, and the root moves on past
     /// nodes the agent already stands on; a goal that changes then finds the agent at most
     /// this far from where it can turn. With a step, the root also moves only along a path
-    /// to the goal (not towards the node nearest a goal not yet joined), and with
+    /// to the goal (not towards the node nearest a goal not yet joined, unless the arena is
+    /// full and the search stuck: [`crate::planner::STUCK_EXPANSIONS`]), and with
     /// `path_shortcuts` the node after the next one is first offered the root as parent. 0 =
     /// to the next node whatever its distance, also while searching (the paper).
     pub root_step: f32,
@@ -322,6 +323,35 @@ impl Config {
         self.density_trades = true;
         self.profile = Profile::Tuned;
         self
+    }
+
+    /// The configuration with its lengths fitted to a map of `width_m` x `height_m` metres
+    /// in cells of `cell_m` (the rule that follows the map, [`length_scale`]): `e_max`,
+    /// `sigma`, `e_search` and `root_step` are multiplied by the map's length scale, and the
+    /// three steps are kept at least [`MIN_STEP_CELLS`] cells long. On maps 100-200 m across
+    /// (the paper's) the scale is exactly 1 and nothing changes, bit for bit; a 20 m map at
+    /// 0.05 m gets a fifth of Table 2's lengths (`e_max` 1 m, `sigma` 6 m), a 400 m map twice
+    /// them. Counts (`n_max`, candidates) and times do not depend on the map's size.
+    pub fn for_map(mut self, width_m: f32, height_m: f32, cell_m: f32) -> Self {
+        let k = length_scale(width_m.max(height_m));
+        let floor = if cell_m.is_finite() && cell_m > 0.0 {
+            MIN_STEP_CELLS * cell_m
+        } else {
+            0.0
+        };
+        let step = |len: f32| {
+            if len > 0.0 { (len * k).max(floor) } else { len }
+        };
+        self.e_max = step(self.e_max);
+        self.e_search = step(self.e_search);
+        self.root_step = step(self.root_step);
+        self.sigma *= k;
+        self
+    }
+
+    /// [`Config::for_map`] for this grid's size and cell.
+    pub fn for_grid(self, grid: &crate::map::OccupancyGrid<'_>) -> Self {
+        self.for_map(grid.width_m(), grid.height_m(), grid.cell_size())
     }
 
     /// RT-RRT* (metric `Euclidean`) or RT-RRT*(D) (`Diffusion`).
@@ -473,6 +503,31 @@ impl Config {
     }
 }
 
+/// Map extents (longest side, metres) between which Table 2's lengths apply as printed: the
+/// paper's maps are 100 m and 200 m across.
+pub const PAPER_EXTENT_M: (f32, f32) = (100.0, 200.0);
+
+/// Shortest steering step [`Config::for_map`] gives, in cells: a step of a cell or two would
+/// make the tree crawl on a coarse grid.
+pub const MIN_STEP_CELLS: f32 = 4.0;
+
+/// The length scale of a map `extent_m` across (its longest side): 1 within
+/// [`PAPER_EXTENT_M`], `extent / 100` below it, `extent / 200` above it, so the lengths are
+/// continuous in the extent, proportional to it off the paper's range and Table 2's on it. A
+/// non-finite or non-positive extent gives 1.
+pub fn length_scale(extent_m: f32) -> f32 {
+    let (lo, hi) = PAPER_EXTENT_M;
+    if !(extent_m.is_finite() && extent_m > 0.0) {
+        1.0
+    } else if extent_m < lo {
+        extent_m / lo
+    } else if extent_m > hi {
+        extent_m / hi
+    } else {
+        1.0
+    }
+}
+
 /// The paper's Table 1 name of a configuration, e.g. `Bi-AM-RRT*(D)`, `RT-RRT*(D)-1`.
 #[derive(Clone, Copy, Debug)]
 pub struct PlannerName(Config);
@@ -564,6 +619,31 @@ mod tests {
         assert_eq!(tuned.profile, Profile::Tuned);
         assert_eq!(tuned.validate(), Ok(()));
         assert!(Config::from_name("AM-RRT*(D)-12").is_none());
+    }
+
+    #[test]
+    fn lengths_follow_the_map_and_keep_table_2_on_the_papers() {
+        for c in Config::table1()
+            .into_iter()
+            .chain(Config::table1().map(Config::tuned))
+        {
+            // The paper's maps: 100 m and 200 m at 1 m cells, bit for bit.
+            for side in [100.0, 150.0, 200.0] {
+                assert_eq!(c.for_map(side, side, 1.0), c, "{}", c.name());
+            }
+            // A 20 m map at 0.05 m: a fifth of every length.
+            let f = c.for_map(20.0, 15.0, 0.05);
+            assert!((f.e_max - c.e_max * 0.2).abs() < 1e-6);
+            assert!((f.sigma - c.sigma * 0.2).abs() < 1e-5);
+            assert!((f.e_search - c.e_search * 0.2).abs() < 1e-5);
+            assert!((f.root_step - c.root_step * 0.2).abs() < 1e-6);
+            assert_eq!(f.validate(), Ok(()));
+            // 400 m: twice; a tiny coarse map keeps steps of 4 cells.
+            assert_eq!(c.for_map(400.0, 100.0, 1.0).e_max, c.e_max * 2.0);
+            assert_eq!(c.for_map(8.0, 8.0, 0.5).e_max, 2.0);
+        }
+        assert_eq!(length_scale(f32::NAN), 1.0);
+        assert_eq!(length_scale(50.0), 0.5);
     }
 
     /// Issue 7, case 7: NaN or negative `e_max`, `sigma`, zero budgets and `p_goal > 1` were

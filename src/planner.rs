@@ -69,6 +69,12 @@ use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
 use crate::tree::{Cost, NodeId, Tree};
 
+/// With a root step ([`Config::root_step`]), the root waits for the goal to join before it
+/// moves, unless the forward arena is full and the search has made this many expansions per
+/// node of the arena without the goal: then it moves on towards the node nearest the goal, as
+/// the paper's planners always do (liveness: a full tree that cannot move never joins).
+pub const STUCK_EXPANSIONS: u64 = 4;
+
 /// Most path nodes one call re-roots past while following the agent ([`Planner::plan`]): the
 /// next waypoint and the nodes the agent already stands on.
 pub const FOLLOW_STEPS: usize = 4;
@@ -193,6 +199,10 @@ pub struct Stats {
     pub reanchored: u32,
     /// Times no tree node could reach the agent and the forward tree restarted from it.
     pub restarted: u32,
+    /// States let in by the starving rule (a search whose density rule had turned away
+    /// [`crate::search::STARVING`] states in a row admits a state no node is near; module
+    /// `search`), both trees. 0 on the paper's maps.
+    pub starving_admits: u32,
 }
 
 /// The planner. `N` nodes and `B` buckets per tree, up to `K` dynamic obstacles; `M` the
@@ -690,8 +700,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         // With a root step (tuned), the root moves only along a path to the goal: towards
         // the node nearest a goal not yet joined it could take the agent the wrong way just
-        // before the goal joins (a search takes tens of microseconds).
-        if self.cfg.root_step > 0.0 && self.goal_node().is_none() {
+        // before the goal joins (a search takes tens of microseconds). Unless the search is
+        // stuck: a full arena that has made `STUCK_EXPANSIONS x N` expansions without the
+        // goal finds it only by moving on, as the paper's planners do (the nodes left behind
+        // become the ones recycled).
+        let stuck = self.fwd.tree.is_full()
+            && self.stats.expansions >= (N as u64).saturating_mul(STUCK_EXPANSIONS);
+        if self.cfg.root_step > 0.0 && self.goal_node().is_none() && !stuck {
             return false;
         }
         let Some(end) = self.path_end(meter) else {
@@ -809,6 +824,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
+    /// Counts in the stats the states the starving rule let in since both trees held `before`.
+    fn note_holes(&mut self, before: u32) {
+        let now = self.fwd.holes.saturating_add(self.rev.holes);
+        let new = now.saturating_sub(before);
+        self.stats.starving_admits = self.stats.starving_admits.saturating_add(new);
+    }
+
     /// One expansion of each growing tree and the rewiring after it.
     fn step<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, call: Deadline) {
         let env = Env {
@@ -817,11 +839,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             cfg: &self.cfg,
             call: self.call,
         };
+        let holes = self.fwd.holes.saturating_add(self.rev.holes);
         let grown = self
             .fwd
             .expand(&env, &mut self.rng, self.goal.as_mut(), meter);
         self.full |= grown.full;
         self.stats.expansions = self.stats.expansions.saturating_add(1);
+        self.note_holes(holes);
         if grown.goal_joined {
             self.goal_joined(meter);
         } else if let (Some(a), true) = (grown.added, self.rev_goal.is_some())
@@ -862,11 +886,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         // The reverse tree, while the goal is not in the forward tree.
         if self.rev_goal.is_some() {
+            let holes = self.fwd.holes.saturating_add(self.rev.holes);
             let grown = self
                 .rev
                 .expand(&env, &mut self.rng, self.rev_goal.as_mut(), meter);
             self.full |= grown.full;
             self.stats.reverse_expansions = self.stats.reverse_expansions.saturating_add(1);
+            self.note_holes(holes);
             if let Some(b) = grown.added
                 && let Err(blocked) = self.try_meet(b, false, meter)
             {

@@ -38,6 +38,13 @@
 //!   node (a duplicate sample, a dense neighbourhood), so neither the duplicate test nor the
 //!   density rule can keep a reachable goal out; a node already standing on the goal (within
 //!   1e-4 of a cell) becomes the goal's node.
+//! - Starving (liveness; not in the paper): once the density rule has turned away
+//!   [`STARVING`] states in a row while the tree's goal is not in it, a state with no node
+//!   within `e_max / sqrt(n_max)` (the spacing of `n_max` nodes spread over an `e_max` disc)
+//!   is let in whatever the count around it. A room smaller than `e_max` whose ways out are
+//!   narrow otherwise holds `n_max` nodes and nothing else can grow; the nodes let in keep a
+//!   spacing, so a neighbourhood still holds a bounded number (at most about `4 n_max`).
+//!   Counted in [`crate::Stats::starving_admits`]; never triggered on the paper's maps.
 //! - A full arena makes room while the tree's goal is not joined, or joined only over a path
 //!   that crosses a dynamic obstacle: one leaf is recycled (among 16 random nodes, the leaf with
 //!   the highest `Cost(x) + d_E(x, goal)`, never the root, the goal or the new node's parent)
@@ -62,6 +69,12 @@ pub const NEAR_CAP: usize = 64;
 
 /// Most nodes one greedy connection (RRT-Connect's step, [`Config::connect`]) adds.
 pub const CONNECT_STEPS: usize = 32;
+
+/// States turned away by the density rule in a row, while a tree's goal is not in it, after
+/// which the tree counts as starving and the density rule keeps out only states within the
+/// cover's spacing of a node (module docs). On the paper's maps a search never refuses this
+/// many in a row (`tests/liveness.rs`), so the paper's configurations grow as printed there.
+pub const STARVING: u16 = 1024;
 
 /// Steering candidates ranked at once (more are drawn in several batches).
 const STEER_BATCH: usize = 32;
@@ -112,6 +125,11 @@ pub struct TreeStore<const N: usize, const B: usize> {
     pub(crate) goal_queue: NodeQueue<SWEEP_CAP>,
     /// Where the path shortcuts ([`Config::path_shortcuts`]) go on (`None`: at the goal).
     pub(crate) shortcut_at: Option<NodeId>,
+    /// States the density rule turned away in a row while the tree's goal is not in it
+    /// (saturating): from [`STARVING`] on, the tree is starving (module docs).
+    pub(crate) refused: u16,
+    /// States let in by the starving rule since the storage was made (saturating).
+    pub(crate) holes: u32,
 }
 
 impl<const N: usize, const B: usize> Default for TreeStore<N, B> {
@@ -130,6 +148,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             goal_stack: NodeStack::new(),
             goal_queue: NodeQueue::new(),
             shortcut_at: None,
+            refused: 0,
+            holes: 0,
         }
     }
 
@@ -141,6 +161,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// Empties the tree and makes a root at `pos`; forgets all rewiring state.
     pub(crate) fn reset(&mut self, pos: Point) {
         let root = self.tree.reset(pos);
+        self.refused = 0;
         self.index.clear();
         let _ = self.index.insert(root, pos);
         self.restart_sweeps();
@@ -149,6 +170,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// Empties the tree entirely.
     pub(crate) fn clear(&mut self) {
         self.tree.clear();
+        self.refused = 0;
         self.index.clear();
         self.restart_sweeps();
     }
@@ -563,11 +585,11 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             .as_deref()
             .is_some_and(|t| t.node.is_none() && t.pos == x_new);
         // Not already in the tree (the goal is then joined to that node by `join`).
-        if let Some((_, d2)) = self.index.nearest(x_new, self.tree.positions())
-            && d2 < env.duplicate_sq()
-        {
-            return None;
-        }
+        let nearest_sq = match self.index.nearest(x_new, self.tree.positions()) {
+            Some((_, d2)) if d2 < env.duplicate_sq() => return None,
+            Some((_, d2)) => d2,
+            None => f32::INFINITY,
+        };
         let radius = env.radius(self.tree.len());
         let mut near = Near::new();
         let found = self.nearby(x_new, radius, &mut near, meter);
@@ -583,7 +605,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             cfg.n_max
         };
         let exempt = beacon.is_some() && cfg.dense_beacons;
-        let dense = !(found < n_max as usize || far_sample || is_goal || exempt);
+        // A starving search (liveness): a state in a hole of the cover the rule aims at (no
+        // node within `e_max / sqrt(n_max)`, the spacing of `n_max` nodes spread over an
+        // `e_max` disc) is let in, so no region whose way out is narrow stays closed.
+        let spacing = cfg.e_max / libm::sqrtf(f32::from(n_max.max(1)));
+        let hole = searching && self.refused >= STARVING && nearest_sq > spacing * spacing;
+        let dense = !(found < n_max as usize || far_sample || is_goal || exempt || hole);
+        let by_hole = hole && !(found < n_max as usize || far_sample || is_goal || exempt);
         // A dense neighbourhood inside the ellipse may still trade (tuned): its worst leaf
         // for a state that bounds a shorter path.
         let swap = match (&view, target.as_deref()) {
@@ -594,6 +622,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             _ => None,
         };
         if dense && swap.is_none() {
+            if searching {
+                self.refused = self.refused.saturating_add(1);
+            }
             if cfg.base == Base::RtRrt {
                 let _ = self.goal_queue.push_back(x_nearest);
             }
@@ -645,6 +676,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
         if cfg.base == Base::RtRrt {
             let _ = self.goal_queue.push_back(id);
+        }
+        self.refused = 0;
+        if by_hole {
+            self.holes = self.holes.saturating_add(1);
         }
         Some((id, is_goal))
     }

@@ -1,0 +1,225 @@
+//! Liveness: a goal that can be reached joins the tree (promise 4), in narrow places and with
+//! small arenas, in every configuration. Deterministic: virtual clock, fixed seeds.
+
+mod common;
+
+use std::time::Duration;
+
+use bi_am_rrt::builtin;
+use bi_am_rrt::clock::FakeClock;
+use bi_am_rrt::map::pack_grid;
+use bi_am_rrt::{Config, Euclidean, Map, MetricKind, OccupancyGrid, Planner, Point, Storage};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+const K: usize = 4;
+
+/// The development machine's virtual clock: 12 ns per unit of work, 1 ns per reading.
+fn clock() -> FakeClock {
+    FakeClock::nanos().with_work_cost(12).with_step(1)
+}
+
+/// What the agent does while the goal is not in the tree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Agent {
+    /// Stays at the start (a caller that waits for a path).
+    Holds,
+    /// Moves 0.7 m per call towards the waypoint (the papers' agent, and a robot's loop).
+    Follows,
+}
+
+/// Calls until the goal joins the forward tree (None: not within `calls`), and the tree's size
+/// then.
+#[allow(clippy::too_many_arguments)]
+fn calls_to_join<const N: usize, const B: usize>(
+    grid: OccupancyGrid<'_>,
+    cfg: Config,
+    start: Point,
+    goal: Point,
+    agent_does: Agent,
+    seed: u64,
+    calls: u32,
+) -> (Option<u32>, usize) {
+    let mut storage = Box::new(Storage::<N, B>::new());
+    let mut planner = Planner::new(
+        &mut storage,
+        Map::<K>::new(grid),
+        Euclidean,
+        XorShiftRng::seed_from_u64(seed),
+        cfg,
+        start,
+    )
+    .unwrap();
+    let clock = clock();
+    planner.set_goal(goal).unwrap();
+    let mut agent = start;
+    for call in 0..calls {
+        let p = planner.plan(&clock, agent).unwrap();
+        if agent_does == Agent::Follows {
+            assert!(
+                planner.map().free_path(agent, p.waypoint),
+                "waypoint not free"
+            );
+            agent = agent.step_towards(p.waypoint, 0.7);
+        }
+        if p.goal_in_tree {
+            return (Some(call + 1), planner.tree().len());
+        }
+    }
+    (None, planner.tree().len())
+}
+
+/// Case 2's kind of map, drawn here: 20 m x 20 m at 0.05 m (400 x 400 cells). The start sits
+/// in a 4 m x 4 m room whose exits are a 0.6 m gap and a 1 m gap; two long walls then make
+/// the way to the goal zig-zag.
+fn pocket_bits() -> Vec<u8> {
+    let (w, h) = (400u16, 400u16);
+    let mut bits = vec![0u8; OccupancyGrid::bytes_needed(w, h)];
+    // Metres to cells: a wall is a rectangle [x0, x1) x [y0, y1) in metres.
+    let walls: &[(f32, f32, f32, f32)] = &[
+        // The room: (1, 1) to (5, 5), walls 0.1 m thick.
+        (1.0, 1.0, 5.1, 1.1),
+        (1.0, 5.0, 2.0, 5.1),
+        (2.6, 5.0, 5.1, 5.1), // top wall, 0.6 m gap at x 2.0-2.6
+        (1.0, 1.0, 1.1, 5.1),
+        (5.0, 1.0, 5.1, 2.0),
+        (5.0, 3.0, 5.1, 5.1), // right wall, 1 m gap at y 2-3
+        // The zig-zag.
+        (0.0, 8.0, 17.0, 8.2),
+        (3.0, 14.0, 20.0, 14.2),
+    ];
+    pack_grid(&mut bits, w, h, |c, r| {
+        let (x, y) = ((c as f32 + 0.5) * 0.05, (r as f32 + 0.5) * 0.05);
+        walls
+            .iter()
+            .any(|&(x0, y0, x1, y1)| x >= x0 && x < x1 && y >= y0 && y < y1)
+    })
+    .unwrap();
+    bits
+}
+
+/// A 120 m x 120 m map at 1 m cells of nested square walls 2 m thick, 12 m apart, each with
+/// one 6 m door, the doors alternating between opposite corners: from the centre the way out
+/// winds round every ring, as in a spiral (about 500 m).
+fn rings_bits() -> Vec<u8> {
+    let (w, h) = (120u16, 120u16);
+    let mut bits = vec![0u8; OccupancyGrid::bytes_needed(w, h)];
+    pack_grid(&mut bits, w, h, |c, r| {
+        let (x, y) = (i32::from(c), i32::from(r));
+        // Distance to the border in the Chebyshev sense; ring k occupies offsets 12k..12k+2.
+        let d = x.min(y).min(119 - x).min(119 - y);
+        let k = d / 12;
+        if !(1..=4).contains(&k) || d % 12 >= 2 {
+            return false;
+        }
+        // The door: near the top-left corner on even rings, the bottom-right on odd ones,
+        // in the ring's top or bottom side.
+        let (lo, hi) = (12 * k, 119 - 12 * k);
+        let door = if k % 2 == 0 {
+            y < lo + 2 && x >= lo + 4 && x < lo + 10
+        } else {
+            y > hi - 2 && x <= hi - 4 && x > hi - 10
+        };
+        !door
+    })
+    .unwrap();
+    bits
+}
+
+/// Issue 23, case 2: on a 20 m map at 0.05 m the start's room (4 m, smaller than `e_max`) held
+/// `n_max` nodes and the density rule turned every other state away: RT-RRT* tuned ended
+/// 1,000 calls with 12 nodes (seeds 1 and 2). The starving rule lets a state into a hole of
+/// the cover after 1,024 refusals in a row. With Table 2's metres and with the lengths that
+/// follow the map, every configuration joins, the agent held at the start.
+#[test]
+fn regression_case_2_a_room_with_narrow_exits_does_not_starve_the_tree() {
+    let bits = pocket_bits();
+    let grid = OccupancyGrid::new(&bits, 400, 400, 0.05).unwrap();
+    let mut failures = Vec::new();
+    for named in [
+        Config::bi_am_rrt(MetricKind::Euclidean),
+        Config::bi_am_rrt(MetricKind::Euclidean).tuned(),
+        Config::rt_rrt(MetricKind::Euclidean),
+        Config::rt_rrt(MetricKind::Euclidean).tuned(),
+        Config::am_rrt(MetricKind::Euclidean),
+    ] {
+        for (lengths, cfg) in [("paper", named), ("map", named.for_grid(&grid))] {
+            let mut cfg = cfg;
+            cfg.t_exp = Duration::from_millis(20);
+            for seed in 1..=3 {
+                let (joined, nodes) = calls_to_join::<2048, 1024>(
+                    grid,
+                    cfg,
+                    Point::new(3.0, 3.0),
+                    Point::new(18.0, 18.0),
+                    Agent::Holds,
+                    seed,
+                    1_000,
+                );
+                if joined.is_none() {
+                    failures.push(format!(
+                        "{} ({lengths} lengths) seed {seed}: {nodes} nodes",
+                        cfg.name()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Issue 23, case 3: tuned one-tree planners with a full arena never joined, the agent never
+/// moving: with a root step the root moved only along a path to the goal, so a full tree
+/// could neither grow nor move on. RT-RRT* tuned, 64 nodes, t_exp 2 ms, maze (5, 5) to
+/// (55, 55): no join in 1,500 calls (seeds 1-3; the paper's RT-RRT* joined at 180-198); also
+/// AM-RRT*(E) tuned, 256 nodes, on a 120 m spiral-like map. A full arena whose search made
+/// `STUCK_EXPANSIONS x N` expansions without the goal now lets the root move towards the node
+/// nearest the goal, as the paper's planners do.
+#[test]
+fn regression_case_3_a_full_tuned_arena_still_joins() {
+    let s = &builtin::MAZE;
+    for named in [
+        Config::rt_rrt(MetricKind::Euclidean),
+        Config::rt_rrt(MetricKind::Euclidean).tuned(),
+    ] {
+        let mut cfg = named.with_sigma(s.sigma);
+        cfg.t_exp = Duration::from_millis(2);
+        for seed in 1..=3 {
+            let (joined, nodes) = calls_to_join::<64, 64>(
+                s.grid,
+                cfg,
+                Point::new(5.0, 5.0),
+                Point::new(55.0, 55.0),
+                Agent::Follows,
+                seed,
+                1_500,
+            );
+            assert!(
+                joined.is_some(),
+                "{} seed {seed}: {nodes} nodes",
+                cfg.name()
+            );
+        }
+    }
+    // The 120 m rings (a spiral's way, about 500 m): AM-RRT*(E) tuned with 256 nodes.
+    let bits = rings_bits();
+    let grid = OccupancyGrid::new(&bits, 120, 120, 1.0).unwrap();
+    let mut cfg = Config::am_rrt(MetricKind::Euclidean).tuned();
+    cfg.t_exp = Duration::from_millis(20);
+    for seed in 1..=2 {
+        let (joined, nodes) = calls_to_join::<256, 256>(
+            grid,
+            cfg,
+            Point::new(60.0, 60.0),
+            Point::new(5.0, 115.0),
+            Agent::Follows,
+            seed,
+            1_500,
+        );
+        assert!(
+            joined.is_some(),
+            "{} seed {seed}: {nodes} nodes",
+            cfg.name()
+        );
+    }
+}
