@@ -7,7 +7,8 @@
 //! 1. **The twin** (`examples/shared/mission.rs`): Bi-AM-RRT*(E) across the built-in 40 m field
 //!    on a *virtual* clock advanced by the planner's work, so it prints the same line as
 //!    `examples/twin.rs` on the host, bit for bit (CI compares them).
-//! 2. **Office, in real time**: Bi-AM-RRT*(D) from the office scenario's start to its goal 1,
+//! 2. **Office, in real time**: Bi-AM-RRT*(D) from the office scenario's start to its goal 1
+//!    (or the start and goal 1 of whichever scenario was exported last, a nav2 map say),
 //!    with the occupancy grid and the diffusion table in flash (exported by
 //!    `host-sim export`), `t_exp` = 150 ms measured on SysTick
 //!    ([`bi_am_rrt::cortex::SysTickClock`], 168 MHz core clock), and the agent moving as in the
@@ -30,10 +31,11 @@
 #[path = "shared/mission.rs"]
 mod mission;
 
-/// The office scenario, exported by `host-sim export` (grid and table as flash `static`s).
+/// The scenario last exported by `host-sim export` to `BIAMRRT_FLASH_DIR` (`scenario.rs`:
+/// grid and table as flash `static`s): the office in CI, or any other (a nav2 map).
 #[allow(dead_code)]
-mod office {
-    include!(concat!(env!("BIAMRRT_FLASH_DIR"), "/office.rs"));
+mod scenario {
+    include!(concat!(env!("BIAMRRT_FLASH_DIR"), "/scenario.rs"));
 }
 
 use bi_am_rrt::agent::{Protocol, run_to_goal};
@@ -96,24 +98,32 @@ fn run() -> bool {
         return false;
     };
     let clock = SysTickClock::start(cp.SYST, CORE_HZ);
-    twin_ok && office_mission(storage, times, &clock)
+    twin_ok && exported_mission(storage, times, &clock)
 }
 
-fn office_mission(storage: &mut MissionStorage, times: &mut [u16], clock: &SysTickClock) -> bool {
+fn exported_mission(storage: &mut MissionStorage, times: &mut [u16], clock: &SysTickClock) -> bool {
     let (Ok(grid), Ok(table)) = (
-        OccupancyGrid::new(&office::GRID, office::COLS, office::ROWS, office::CELL),
-        DiffusionTable::new(&office::TABLE),
+        OccupancyGrid::new(
+            &scenario::GRID,
+            scenario::COLS,
+            scenario::ROWS,
+            scenario::CELL,
+        ),
+        DiffusionTable::new(&scenario::TABLE),
     ) else {
-        hprintln!("office: bad grid or table in flash");
+        hprintln!("scenario: bad grid or table in flash");
         return false;
     };
     let map: Map<'static, 4> = Map::new(grid);
-    let cfg = Config::bi_am_rrt(MetricKind::Diffusion).with_sigma(office::SIGMA);
+    // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
+    let cfg = Config::bi_am_rrt(MetricKind::Diffusion)
+        .for_grid(&grid)
+        .with_sigma(scenario::SIGMA);
     let rng = XorShiftRng::seed_from_u64(1);
-    let start = Point::new(office::START.0, office::START.1);
-    let goal = Point::new(office::GOALS[0].0, office::GOALS[0].1);
+    let start = Point::new(scenario::START.0, scenario::START.1);
+    let goal = Point::new(scenario::GOALS[0].0, scenario::GOALS[0].1);
     let Ok(mut planner) = Planner::new(storage, map, table, rng, cfg, start) else {
-        hprintln!("office: planner refused its start");
+        hprintln!("scenario: planner refused its start");
         return false;
     };
     let protocol = Protocol {
@@ -145,7 +155,7 @@ fn office_mission(storage: &mut MissionStorage, times: &mut [u16], clock: &SysTi
         last = clock.now();
     });
     let Ok(r) = result else {
-        hprintln!("office: goal refused");
+        hprintln!("scenario: goal refused");
         return false;
     };
     let recorded = &mut times[..calls.min(MAX_CALLS)];
@@ -154,8 +164,9 @@ fn office_mission(storage: &mut MissionStorage, times: &mut [u16], clock: &SysTi
     let budget = clock.ticks(cfg.t_exp);
     let search_ms = r.search_ticks.map_or(0, |t| t / u64::from(CORE_HZ / 1_000));
     hprintln!(
-        "Bi-AM-RRT*(D) on office (real clock, t_exp {} ms): reached {}, search {} ms, path {} m, \
+        "Bi-AM-RRT*(D) on {} (real clock, t_exp {} ms): reached {}, search {} ms, path {} m, \
          {} collisions, {} nodes at goal, {} nodes at the end, {} plan calls",
+        scenario::NAME,
         cfg.t_exp.as_millis(),
         r.reached,
         search_ms,
@@ -177,9 +188,9 @@ fn office_mission(storage: &mut MissionStorage, times: &mut [u16], clock: &SysTi
     );
     hprintln!(
         "grid {} bytes and table {} bytes in flash (table checksum {:08x})",
-        office::GRID.len(),
-        office::TABLE.len(),
-        fnv1a32(&office::TABLE)
+        scenario::GRID.len(),
+        scenario::TABLE.len(),
+        fnv1a32(&scenario::TABLE)
     );
     r.reached && r.collisions == 0
 }

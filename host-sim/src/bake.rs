@@ -433,6 +433,8 @@ pub fn export_flash(
     );
     let source = dir.join(format!("{name}.rs"));
     write_file(&source, src.as_bytes())?;
+    // The firmware example includes `scenario.rs`: the last scenario exported to `dir`.
+    write_file(&dir.join("scenario.rs"), src.as_bytes())?;
     Ok(Exported {
         source,
         grid_bytes: sc.map.bits.len(),
@@ -554,8 +556,50 @@ pub fn geodesic_command(grid: &OwnedGrid, name: &str, out: &Path, all_pairs: boo
 
 /// `host-sim export`: writes a scenario's flash files ([`export_flash`]) and prints their
 /// sizes and the table's error.
-pub fn export_command(sc: &Scenario, table: &TableOptions, out: &Path) -> Result<()> {
+/// Flash the firmware example leaves to a scenario's grid and table: 150 KiB of the 256 KiB
+/// it is held to (the rest is code, about 90 KiB, strings and tables of the twin mission).
+pub const FIRMWARE_DATA_BYTES: usize = 150 * 1024;
+
+/// The table budget an export uses: the one asked for, or with `--max-bytes 0` (auto) the
+/// bake's own default capped so that grid and table fit `data` bytes of flash. Refuses, naming
+/// the way out, when the grid alone leaves no room for a useful table.
+pub fn flash_table_options(
+    sc: &Scenario,
+    table: &TableOptions,
+    data: usize,
+) -> Result<TableOptions> {
+    let grid = sc.map.bits.len();
+    let mut t = *table;
+    if t.max_bytes != 0 {
+        return Ok(t);
+    }
+    // A table needs at least a few hundred pieces of 10 coordinates, and the piece map.
+    let cells = usize::from(sc.map.width) * usize::from(sc.map.height);
+    let least = cells / 2 + 16 * 1024;
+    let room = data.saturating_sub(grid);
+    if room < least {
+        anyhow::bail!(
+            "{}: does not fit the firmware's flash: the grid alone is {grid} bytes ({} x {} cells \
+             at 1 bit) and its table needs at least {least} bytes (half a byte per cell for the \
+             piece map), with {data} bytes of flash for data (--flash-data). Down-sample the \
+             map (larger cells) or give the firmware more flash.",
+            sc.name,
+            sc.map.width,
+            sc.map.height
+        );
+    }
+    t.max_bytes = t.budget(cells).min(room);
+    Ok(t)
+}
+
+pub fn export_command(
+    sc: &Scenario,
+    table: &TableOptions,
+    out: &Path,
+    flash_data: usize,
+) -> Result<()> {
     let t0 = Instant::now();
+    let table = &flash_table_options(sc, table, flash_data)?;
     let ex = export_flash(sc, table, out)?;
     let e = &ex.error;
     println!(
@@ -572,6 +616,16 @@ pub fn export_command(sc: &Scenario, table: &TableOptions, out: &Path) -> Result
     );
     if let Some(w) = error_warning(e) {
         eprintln!("{w}");
+    }
+    let data = ex.grid_bytes + ex.table_bytes;
+    if data > flash_data {
+        eprintln!(
+            "WARNING: grid and table are {data} bytes, over the {flash_data} bytes of flash the \
+             firmware example leaves to data (--flash-data): give --max-bytes at most {}",
+            flash_data.saturating_sub(ex.grid_bytes)
+        );
+    } else {
+        println!("  flash data {data} of {flash_data} bytes: fits the firmware example");
     }
     Ok(())
 }

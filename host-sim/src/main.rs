@@ -72,6 +72,11 @@ enum Command {
         /// Planning time per call in ms (default: the paper's 150).
         #[arg(long)]
         t_exp_ms: Option<u64>,
+        /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
+        /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
+        /// proportional to the map's size off that range; README "Lengths that follow the map").
+        #[arg(long)]
+        paper_lengths: bool,
         /// Also write an animated GIF of the run (run.gif), one frame every N plan calls.
         #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "2",
               value_parser = clap::value_parser!(u32).range(1..))]
@@ -137,6 +142,11 @@ enum Command {
         /// summary.csv and summary.json when complete).
         #[arg(long, default_value = "out/experiment")]
         out: PathBuf,
+        /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
+        /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
+        /// proportional to the map's size off that range; README "Lengths that follow the map").
+        #[arg(long)]
+        paper_lengths: bool,
     },
     /// Turn an experiment's results folder into charts (SVG and PNG) and a Markdown report in
     /// the shape of the paper's Section 5: Fig. 6 (original vs modified for each scheme), box
@@ -206,6 +216,11 @@ enum Command {
         /// for comparing algorithmic changes; its "us" are virtual).
         #[arg(long, value_enum, default_value = "cpu")]
         clock: host_sim::bench::BenchClock,
+        /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
+        /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
+        /// proportional to the map's size off that range; README "Lengths that follow the map").
+        #[arg(long)]
+        paper_lengths: bool,
     },
     /// Soak test: one planner and one agent for a long time with a new random goal every few
     /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
@@ -316,11 +331,17 @@ enum Command {
         /// Scenario to export.
         #[arg(long)]
         scenario: String,
-        /// Output folder (created): NAME.grid, NAME.table, NAME.rs.
+        /// Output folder (created): NAME.grid, NAME.table, NAME.rs, and scenario.rs (the same
+        /// source, which the firmware example includes).
         #[arg(long)]
         out: PathBuf,
         #[command(flatten)]
         table: TableArgs,
+        /// Flash the firmware leaves to grid and table, in bytes: with `--max-bytes 0` the table
+        /// is kept within it (the firmware example: 150 KiB of its 256 KiB); a grid too large
+        /// for it is refused with the way out.
+        #[arg(long, default_value_t = bake::FIRMWARE_DATA_BYTES)]
+        flash_data: usize,
     },
     /// Measure how the expansion rate changes as the tree grows (no motion, wall clock).
     Growth {
@@ -438,13 +459,15 @@ fn main() -> Result<()> {
             out,
             animate,
             t_exp_ms,
+            paper_lengths,
         } => {
-            let sc = match (scenarios, scenario) {
+            let mut sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
                 (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
                 (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
                 (None, None) => maps::builtin_by_name(&builtin)?,
             };
+            sc.paper_lengths = paper_lengths;
             run::run(&RunArgs {
                 scenario: sc,
                 planner,
@@ -476,8 +499,12 @@ fn main() -> Result<()> {
             resume,
             overwrite,
             out,
+            paper_lengths,
         } => {
-            let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            let mut scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            for s in &mut scs {
+                s.paper_lengths = paper_lengths;
+            }
             experiment::run(&ExperimentArgs {
                 shard,
                 existing: if resume {
@@ -562,12 +589,16 @@ fn main() -> Result<()> {
             out,
             ompl,
             clock,
+            paper_lengths,
         } => {
             if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
                 bail!("--budgets: every budget must be a positive number of seconds");
             }
             budgets.sort_by(f64::total_cmp);
-            let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            let mut scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            for s in &mut scs {
+                s.paper_lengths = paper_lengths;
+            }
             let variants = host_sim::bench::parse_variants(&planners)?;
             host_sim::bench::run(&host_sim::bench::BenchArgs {
                 scenarios: scs,
@@ -655,9 +686,10 @@ fn main() -> Result<()> {
             scenario,
             out,
             table,
+            flash_data,
         } => {
             let sc = maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0);
-            bake::export_command(&sc, &table.options(), &out)
+            bake::export_command(&sc, &table.options(), &out, flash_data)
         }
         Command::Bake {
             map,

@@ -280,8 +280,15 @@ pub struct Scenario {
     pub start: Point,
     /// Goals in order.
     pub goals: Vec<Point>,
-    /// Connection distance of the two trees.
+    /// Connection distance of the two trees, metres (a file without `sigma_m` gets the
+    /// paper's 30 m times the map's length scale, [`bi_am_rrt::config::length_scale`]).
     pub sigma: f32,
+    /// The world pose of the map's lower-left corner when positions were given in a ROS map
+    /// frame (y up); `None`: metres from the top-left corner, y down.
+    pub ros_origin: Option<[f64; 2]>,
+    /// Run the planners with Table 2's lengths in metres as printed instead of the lengths
+    /// that follow the map ([`bi_am_rrt::Config::for_map`]; `--paper-lengths`).
+    pub paper_lengths: bool,
 }
 
 #[derive(Deserialize)]
@@ -293,15 +300,14 @@ struct Entry {
     /// Cell side of a PNG map in metres (default 1; a ROS map's YAML gives its own).
     #[serde(default)]
     resolution_m: Option<f32>,
-    #[serde(default = "default_sigma")]
-    sigma_m: f32,
+    #[serde(default)]
+    sigma_m: Option<f32>,
     start: [f32; 2],
     goals: Vec<[f32; 2]>,
 }
 
-fn default_sigma() -> f32 {
-    30.0
-}
+/// The paper's `sigma` on its 100-200 m maps, scaled to other maps.
+const PAPER_SIGMA_M: f32 = 30.0;
 
 /// The name that stands for the built-in scenarios where a scenario file is expected.
 pub const BUILTIN_SET: &str = "builtin";
@@ -394,7 +400,11 @@ pub fn scenarios_from_str(
             source: e.file.display().to_string(),
             start: pt(e.start),
             goals: e.goals.into_iter().map(pt).collect(),
-            sigma: e.sigma_m,
+            sigma: e
+                .sigma_m
+                .unwrap_or(PAPER_SIGMA_M * bi_am_rrt::config::length_scale(wm.max(hm))),
+            ros_origin,
+            paper_lengths: false,
         };
         sc.validate()?;
         out.push(sc);
@@ -403,6 +413,27 @@ pub fn scenarios_from_str(
 }
 
 impl Scenario {
+    /// A position of the planner's frame (metres from the top-left corner, y down) in the
+    /// frame the scenario was written in: a ROS map's frame (y up from its origin) or the
+    /// former.
+    pub fn user_frame(&self, p: Point) -> [f64; 2] {
+        match self.ros_origin {
+            Some([ox, oy]) => {
+                let hm = f64::from(self.map.height) * f64::from(f32::from_bits(self.map.cell_bits));
+                [f64::from(p.x) + ox, hm - f64::from(p.y) + oy]
+            }
+            None => [f64::from(p.x), f64::from(p.y)],
+        }
+    }
+
+    /// A position as the user wrote it, for messages: `(x, y)` in the scenario's frame,
+    /// rounded to a millimetre.
+    pub fn show(&self, p: Point) -> String {
+        let [x, y] = self.user_frame(p);
+        let r = |v: f64| (v * 1000.0).round() / 1000.0;
+        format!("({}, {})", r(x), r(y))
+    }
+
     /// Checks what a run needs: at least one goal, `sigma` finite and not negative, the start
     /// and every goal inside the map and free. Goals are numbered from 1, as in the output.
     pub fn validate(&self) -> Result<()> {
@@ -419,7 +450,7 @@ impl Scenario {
         let map: bi_am_rrt::Map<'_, 0> = bi_am_rrt::Map::new(self.map.grid());
         let check = |what: String, p: Point| {
             map.check_point(p)
-                .map_err(|e| anyhow::anyhow!("scenario {name}: {what} ({}, {}): {e}", p.x, p.y))
+                .map_err(|e| anyhow::anyhow!("scenario {name}: {what} {}: {e}", self.show(p)))
         };
         check("start".into(), self.start)?;
         for (i, g) in self.goals.iter().enumerate() {
@@ -451,6 +482,8 @@ pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
         start: s.start,
         goals: s.goals.to_vec(),
         sigma: s.sigma,
+        ros_origin: None,
+        paper_lengths: false,
     }
 }
 
@@ -466,6 +499,37 @@ pub fn builtin_by_name(name: &str) -> Result<Scenario> {
 
 #[cfg(test)]
 mod tests {
+    /// Issue 23: on a ROS map, `start = [50.0, 80.0]` was reported as `(50, 20)`, a position
+    /// of the planner's internal frame; errors now speak in the frame the file was written in.
+    #[test]
+    fn regression_errors_give_positions_in_the_map_frame_the_user_wrote() {
+        // 20 m x 10 m at 0.05 m, origin (-5, 2): the frame spans x -5..15, y 2..12.
+        let grid = OwnedGrid::from_fn(400, 200, 0.05, |c, _| c == 200).unwrap();
+        let load = |_: &Path| {
+            Ok(MapFile {
+                grid: grid.clone(),
+                ros_origin: Some([-5.0, 2.0]),
+            })
+        };
+        let text = "[s]\nfile = \"m.yaml\"\nstart = [50.0, 80.0]\ngoals = [[1.0, 3.0]]\n";
+        let e = format!("{:#}", scenarios_from_str(text, load, None).unwrap_err());
+        assert!(e.contains("start (50, 80)"), "{e}");
+        // Inside the map, on the wall at x = 5 (column 200).
+        let text = "[s]\nfile = \"m.yaml\"\nstart = [0.0, 5.0]\ngoals = [[5.01, 7.5]]\n";
+        let e = format!("{:#}", scenarios_from_str(text, load, None).unwrap_err());
+        assert!(e.contains("goal 1 (5.01, 7.5)"), "{e}");
+        // A valid one: positions convert both ways, and `sigma` follows the map (20 m: a
+        // fifth of the paper's 30 m) when the file does not give it.
+        let text = "[s]\nfile = \"m.yaml\"\nstart = [0.0, 5.0]\ngoals = [[12.5, 11.0]]\n";
+        let sc = scenarios_from_str(text, load, None).unwrap().remove(0);
+        let [x, y] = sc.user_frame(sc.goals[0]);
+        assert!(
+            (x - 12.5).abs() < 1e-4 && (y - 11.0).abs() < 1e-4,
+            "{x} {y}"
+        );
+        assert!((sc.sigma - 6.0).abs() < 1e-5, "{}", sc.sigma);
+    }
+
     use super::*;
 
     #[test]

@@ -65,6 +65,10 @@ impl ScenarioId {
             bytes.extend_from_slice(&p.y.to_le_bytes());
         }
         bytes.extend_from_slice(&s.sigma.to_le_bytes());
+        // Only when set, so the digests of earlier folders stay valid.
+        if s.paper_lengths {
+            bytes.extend_from_slice(b"paper lengths");
+        }
         Self {
             name: s.name.clone(),
             digest: format!("{:08x}", bi_am_rrt::metric::fnv1a32(&bytes)),

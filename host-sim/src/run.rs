@@ -292,14 +292,34 @@ pub fn run(args: &RunArgs) -> Result<()> {
         "{} on {} ({}), seed {}, {:?} clock",
         args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock
     );
+    let used = prep.config(cfg);
+    println!(
+        "  lengths {} (scale {:.3}): e_max {:.3} m, e_search {:.3} m, root step {:.3} m, sigma {:.3} m",
+        if prep.scenario.paper_lengths {
+            "as Table 2 prints them (--paper-lengths)"
+        } else {
+            "that follow the map"
+        },
+        prep.length_scale(),
+        used.e_max,
+        used.search_step(),
+        used.root_step,
+        used.sigma
+    );
     for g in &rows {
+        let goal = prep.scenario.show(prep.scenario.goals[g.goal_index - 1]);
         println!(
-            "  goal {}: reached {}, search time {}, path {:.2} m, {} collisions, {} nodes when found, {} plan calls",
+            "  goal {} {goal}: reached {}, search time {}, travelled {:.2} m, exact optimum {}, {} collisions, {} nodes when found, {} plan calls",
             g.goal_index,
             g.reached,
             g.search_time_s
                 .map_or("-".into(), |s| format!("{:.3} ms", s * 1e3)),
             g.path_length_m,
+            match (g.optimal_m, g.travelled_ratio) {
+                (Some(o), Some(r)) => format!("{o:.2} m (travelled / optimum {r:.3})"),
+                (Some(o), None) => format!("{o:.2} m"),
+                _ => "- (unreachable)".into(),
+            },
             g.collisions,
             g.nodes_at_goal.map_or("-".into(), |n| n.to_string()),
             g.calls

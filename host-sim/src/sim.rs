@@ -114,9 +114,31 @@ impl Prepared {
         })
     }
 
-    /// The configuration for this scenario: the named planner with the scenario's `sigma`.
+    /// The configuration for this scenario: the named planner with its lengths fitted to the
+    /// map ([`Config::for_map`]; Table 2's metres with `paper_lengths`) and the scenario's
+    /// `sigma`. A length set by hand (`@e_max=8`, a value other than the named planner's) is
+    /// taken as written, in metres.
     pub fn config(&self, base: Config) -> Config {
-        base.with_sigma(self.scenario.sigma)
+        let mut c = base;
+        if !self.scenario.paper_lengths {
+            let named = Config::from_name(&base.name().to_string()).unwrap_or(base);
+            let fitted = named.for_grid(&self.scenario.map.grid());
+            let fit =
+                |mine: f32, named: f32, fitted: f32| if mine == named { fitted } else { mine };
+            c.e_max = fit(c.e_max, named.e_max, fitted.e_max);
+            c.e_search = fit(c.e_search, named.e_search, fitted.e_search);
+            c.root_step = fit(c.root_step, named.root_step, fitted.root_step);
+        }
+        c.with_sigma(self.scenario.sigma)
+    }
+
+    /// The length scale the configurations get on this scenario (1: Table 2's metres).
+    pub fn length_scale(&self) -> f32 {
+        if self.scenario.paper_lengths {
+            return 1.0;
+        }
+        let g = self.scenario.map.grid();
+        bi_am_rrt::config::length_scale(g.width_m().max(g.height_m()))
     }
 }
 

@@ -897,3 +897,39 @@ fn a_map_baked_on_its_pieces_agrees_with_the_cell_bake() {
     assert!(r >= 0.98, "{r}");
     assert!((rc - rp).abs() <= 0.03, "{rc} vs {rp}");
 }
+
+/// The lengths a run uses follow the map: Table 2's on the paper's sizes (bit for bit), a
+/// fraction on a small map, Table 2's everywhere with `paper_lengths`, and a length set by hand
+/// (`@e_max=...`) as written.
+#[test]
+fn run_lengths_follow_the_map() {
+    use bi_am_rrt::{Config, MetricKind};
+    use host_sim::sim::Prepared;
+    let paper = Config::bi_am_rrt(MetricKind::Diffusion);
+    for tuned in [false, true] {
+        let named = if tuned { paper.tuned() } else { paper };
+        // office_200: 200 m at 1 m cells.
+        let office = Prepared::new(maps::builtin_by_name("office_200").unwrap());
+        assert_eq!(
+            office.config(named),
+            named.with_sigma(office.scenario.sigma)
+        );
+        // The small maze: 60 m, scale 0.6; 5 m x 0.6 = 3 m, kept at 4 cells (4 m).
+        let mut sc = maps::builtin_by_name("maze").unwrap();
+        let maze = Prepared::new(sc.clone());
+        let c = maze.config(named);
+        assert_eq!(c.e_max, 4.0);
+        if tuned {
+            assert!((c.e_search - 12.0).abs() < 1e-5, "{}", c.e_search);
+        }
+        assert!((maze.length_scale() - 0.6).abs() < 1e-6);
+        assert_eq!(c.sigma, sc.sigma, "the scenario's sigma is kept");
+        let mut hand = named;
+        hand.e_max = 8.0;
+        assert_eq!(maze.config(hand).e_max, 8.0, "a length set by hand");
+        sc.paper_lengths = true;
+        let maze = Prepared::new(sc);
+        assert_eq!(maze.config(named).e_max, named.e_max);
+        assert_eq!(maze.length_scale(), 1.0);
+    }
+}
