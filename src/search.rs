@@ -47,8 +47,11 @@
 //!   Counted in [`crate::Stats::starving_admits`]; never triggered on the paper's maps.
 //! - A full arena makes room while the tree's goal is not joined, or joined only over a path
 //!   that crosses a dynamic obstacle: one leaf is recycled (among 16 random nodes, the leaf with
-//!   the highest `Cost(x) + d_E(x, goal)`, never the root, the goal or the new node's parent)
-//!   and the new node takes its slot. Once a free path exists, a full tree rewires what it has
+//!   the highest `Cost(x) + d_E(x, goal)` among those that share their index bucket with
+//!   another node, or among all when none does; never the root, the goal or the new node's
+//!   parent) and the new node takes its slot. Thinning where the tree is dense keeps the lone
+//!   nodes at its frontier: the highest bound alone picked the frontier of every detour, and a
+//!   64-node tree never got through the built-in maze (issue 23, case 3). Once a free path exists, a full tree rewires what it has
 //!   (the paper's behaviour).
 
 use crate::clock::{Clock, Deadline, Meter};
@@ -781,7 +784,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
 
     /// Frees one slot of the arena by removing the leaf least likely to lie on a path to
     /// `toward`: among a few random nodes, the leaf (not the root, not in `keep`) with the
-    /// highest `Cost(x) + d_E(x, toward)`, a lower bound of the best path through it; a
+    /// highest `Cost(x) + d_E(x, toward)`, a lower bound of the best path through it, taken
+    /// first among leaves that share their index bucket (module docs); a
     /// bounded scan when no drawn node is a usable leaf. Ids in `keep` and in the rewiring
     /// sweeps are renamed when the arena's last node moves into the freed slot. Returns whether
     /// a node was removed.
@@ -842,7 +846,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
         // Highest score first; among equal scores the first drawn.
         sort_small_by(&mut drawn, |a, b| b.0.cmp(&a.0));
-        let mut best = drawn.first().copied();
+        // Making room for a search: a leaf that shares its index bucket goes first, so the
+        // tree thins where it is dense and keeps its lone frontier nodes (the search's reach).
+        let mut best = drawn
+            .iter()
+            .find(|&&(_, id)| self.has_company(id, 1, meter))
+            .or(drawn.first())
+            .copied();
         if let Some(t) = trade {
             // A trade takes the best-scored leaf above the bound whose bucket keeps the
             // cover: every part of the map the tree has reached keeps a node for the goals

@@ -168,58 +168,65 @@ fn regression_case_2_a_room_with_narrow_exits_does_not_starve_the_tree() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// Issue 23, case 3: tuned one-tree planners with a full arena never joined, the agent never
-/// moving: with a root step the root moved only along a path to the goal, so a full tree
-/// could neither grow nor move on. RT-RRT* tuned, 64 nodes, t_exp 2 ms, maze (5, 5) to
-/// (55, 55): no join in 1,500 calls (seeds 1-3; the paper's RT-RRT* joined at 180-198); also
-/// AM-RRT*(E) tuned, 256 nodes, on a 120 m spiral-like map. A full arena whose search made
-/// `STUCK_EXPANSIONS x N` expansions without the goal now lets the root move towards the node
-/// nearest the goal, as the paper's planners do.
+/// Issue 23, case 3: tuned one-tree planners with a full arena never joined. RT-RRT* tuned,
+/// 64 nodes, t_exp 2 ms, maze (5, 5) to (55, 55): no join in 1,500 calls, the agent never
+/// moving (seeds 1-3; the paper's RT-RRT* joined at call 180-198 when its agent followed the
+/// waypoints, never when held). Two causes: with a root step the root waited for the goal, so a
+/// full tree could not move on; and making room recycled the leaf with the highest
+/// `Cost + d_E(goal)`, the frontier of every detour. Now a full arena whose search made
+/// `STUCK_EXPANSIONS x N` expansions lets the root move on as the paper's does, and room is
+/// made first from leaves that share their index bucket (the tree thins where it is dense and
+/// keeps its reach). Held or following, these join; also AM-RRT*(E) tuned with 256 nodes on a
+/// 120 m spiral-like map.
 #[test]
-fn regression_case_3_a_full_tuned_arena_still_joins() {
+fn regression_case_3_a_full_arena_still_joins() {
     let s = &builtin::MAZE;
     for named in [
         Config::rt_rrt(MetricKind::Euclidean),
         Config::rt_rrt(MetricKind::Euclidean).tuned(),
+        Config::am_rrt(MetricKind::Euclidean).tuned(),
     ] {
         let mut cfg = named.with_sigma(s.sigma);
         cfg.t_exp = Duration::from_millis(2);
-        for seed in 1..=3 {
-            let (joined, nodes) = calls_to_join::<64, 64>(
-                s.grid,
+        for agent in [Agent::Holds, Agent::Follows] {
+            for seed in 1..=3 {
+                let (joined, nodes) = calls_to_join::<64, 64>(
+                    s.grid,
+                    cfg,
+                    Point::new(5.0, 5.0),
+                    Point::new(55.0, 55.0),
+                    agent,
+                    seed,
+                    1_500,
+                );
+                assert!(
+                    joined.is_some(),
+                    "{} seed {seed}, agent {agent:?}: {nodes} nodes",
+                    cfg.name()
+                );
+            }
+        }
+    }
+    let bits = rings_bits();
+    let grid = OccupancyGrid::new(&bits, 120, 120, 1.0).unwrap();
+    let mut cfg = Config::am_rrt(MetricKind::Euclidean).tuned();
+    cfg.t_exp = Duration::from_millis(20);
+    for agent in [Agent::Holds, Agent::Follows] {
+        for seed in 1..=2 {
+            let (joined, nodes) = calls_to_join::<256, 256>(
+                grid,
                 cfg,
-                Point::new(5.0, 5.0),
-                Point::new(55.0, 55.0),
-                Agent::Follows,
+                Point::new(60.0, 60.0),
+                Point::new(5.0, 115.0),
+                agent,
                 seed,
                 1_500,
             );
             assert!(
                 joined.is_some(),
-                "{} seed {seed}: {nodes} nodes",
+                "{} seed {seed}, agent {agent:?}: {nodes} nodes",
                 cfg.name()
             );
         }
-    }
-    // The 120 m rings (a spiral's way, about 500 m): AM-RRT*(E) tuned with 256 nodes.
-    let bits = rings_bits();
-    let grid = OccupancyGrid::new(&bits, 120, 120, 1.0).unwrap();
-    let mut cfg = Config::am_rrt(MetricKind::Euclidean).tuned();
-    cfg.t_exp = Duration::from_millis(20);
-    for seed in 1..=2 {
-        let (joined, nodes) = calls_to_join::<256, 256>(
-            grid,
-            cfg,
-            Point::new(60.0, 60.0),
-            Point::new(5.0, 115.0),
-            Agent::Follows,
-            seed,
-            1_500,
-        );
-        assert!(
-            joined.is_some(),
-            "{} seed {seed}: {nodes} nodes",
-            cfg.name()
-        );
     }
 }
