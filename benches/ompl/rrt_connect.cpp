@@ -2,18 +2,28 @@
 // the two can be compared in the same run (see benches/ompl/README.md).
 //
 // Input: the bit-packed grid that `host-sim export` writes (cell (col, row) is bit
-// row * width + col, least significant bit first; a set bit is an obstacle; 1 m cells) and the
-// legs file that `host-sim bench` writes (legs.csv: map,leg,sx,sy,gx,gy,optimal_m).
+// row * width + col, least significant bit first; a set bit is an obstacle) and the legs file
+// that `host-sim bench` writes (legs.csv: map,leg,sx,sy,gx,gy,optimal_m), all lengths in cells
+// (bench converts maps of any cell size; ratios and OMPL's relative range do not change).
 // Motion check: the same exact test as the core's `free_path` (cells are closed squares with a
 // margin of a thousandth of a cell; the segment's rows are walked and every cell it touches is
 // read). Time: thread CPU time of `solve` (the planner adds start and goal inside it), planner
 // set-up excluded, as for our side where the bench's clock starts before `set_goal`.
 //
-// Output (stdout): CSV rows map,leg,seed,first_us,first_ratio.
+// Planners: `--planner connect` (default): RRT-Connect, then OMPL's PathSimplifier
+// (simplifyMax) on its first path, timed apart; `--planner informed`: Informed RRT* (path
+// length objective), its first solution and its path cost after each of `--budgets` seconds
+// of thread CPU time (one solve, resumed budget after budget).
+//
+// Output (stdout): CSV rows map,leg,seed,first_us,first_ratio,simplify_us,simplified_ratio,
+// then one cost ratio per budget (empty where a value does not apply).
 
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/SimpleSetup.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/geometric/PathSimplifier.h>
+#include <ompl/geometric/planners/rrt/InformedRRTstar.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
 #include <ompl/util/RandomNumbers.h>
@@ -165,8 +175,9 @@ std::vector<Leg> readLegs(const std::string &path) {
 
 int main(int argc, char **argv) {
     if (argc < 4) {
-        std::cerr << "usage: rrt_connect LEGS.csv GRID_DIR SEEDS [MAP=WIDTHxHEIGHT ...]\n"
-                     "  GRID_DIR holds MAP.grid from `host-sim export`; each map's size is given "
+        std::cerr << "usage: rrt_connect LEGS.csv GRID_DIR SEEDS [--planner connect|informed] "
+                     "[--budgets S,S,...] [MAP=WIDTHxHEIGHT ...]\n"
+                     "  GRID_DIR holds MAP.grid from `host-sim bench`; each map's size is given "
                      "as MAP=WxH\n";
         return 2;
     }
@@ -175,9 +186,23 @@ int main(int argc, char **argv) {
     const auto legs = readLegs(argv[1]);
     const std::string dir = argv[2];
     const int seeds = std::stoi(argv[3]);
+    std::string which = "connect";
+    std::vector<double> budgets;
     std::vector<std::pair<std::string, Grid>> grids;
     for (int i = 4; i < argc; ++i) {
         const std::string spec = argv[i];
+        if (spec == "--planner" && i + 1 < argc) {
+            which = argv[++i];
+            continue;
+        }
+        if (spec == "--budgets" && i + 1 < argc) {
+            std::string list = argv[++i];
+            std::replace(list.begin(), list.end(), ',', ' ');
+            std::istringstream in(list);
+            for (double b; in >> b;) budgets.push_back(b);
+            std::sort(budgets.begin(), budgets.end());
+            continue;
+        }
         const auto eq = spec.find('='), x = spec.find('x', eq);
         if (eq == std::string::npos || x == std::string::npos)
             throw std::runtime_error("bad map size: " + spec);
@@ -186,7 +211,11 @@ int main(int argc, char **argv) {
                                           std::stoi(spec.substr(eq + 1, x - eq - 1)),
                                           std::stoi(spec.substr(x + 1))));
     }
-    std::printf("map,leg,seed,first_us,first_ratio\n");
+    if (which != "connect" && which != "informed")
+        throw std::runtime_error("unknown planner: " + which);
+    std::printf("map,leg,seed,first_us,first_ratio,simplify_us,simplified_ratio");
+    for (double b : budgets) std::printf(",cost_ratio_%g", b);
+    std::printf("\n");
     for (const Leg &leg : legs) {
         const auto it = std::find_if(grids.begin(), grids.end(),
                                      [&](const auto &g) { return g.first == leg.map; });
@@ -216,21 +245,75 @@ int main(int argc, char **argv) {
             goal[0] = leg.gx;
             goal[1] = leg.gy;
             ss.setStartAndGoalStates(start, goal);
-            ss.setPlanner(std::make_shared<og::RRTConnect>(si));
+            const bool informed = which == "informed";
+            if (informed) {
+                ss.setOptimizationObjective(
+                    std::make_shared<ob::PathLengthOptimizationObjective>(si));
+                ss.setPlanner(std::make_shared<og::InformedRRTstar>(si));
+            } else {
+                ss.setPlanner(std::make_shared<og::RRTConnect>(si));
+            }
             ss.setup();  // default range: 0.2 x the space's extent
             auto pdef = ss.getProblemDefinition();
             auto planner = ss.getPlanner();
             const double t0 = threadCpuSeconds();
-            const ob::PlannerStatus st = planner->solve(ob::timedPlannerTerminationCondition(10.0));
-            const double t1 = threadCpuSeconds();
-            if (seed == 0) continue;
-            if (st != ob::PlannerStatus::EXACT_SOLUTION) {
-                std::printf("%s,%d,%d,,\n", leg.map.c_str(), leg.leg, seed);
+            if (!informed) {
+                const ob::PlannerStatus st =
+                    planner->solve(ob::timedPlannerTerminationCondition(10.0));
+                const double t1 = threadCpuSeconds();
+                if (seed == 0) continue;
+                if (st != ob::PlannerStatus::EXACT_SOLUTION) {
+                    std::printf("%s,%d,%d,,,,\n", leg.map.c_str(), leg.leg, seed);
+                    continue;
+                }
+                auto path = *pdef->getSolutionPath()->as<og::PathGeometric>();
+                const double first = path.length();
+                og::PathSimplifier simplifier(si);
+                const double s0 = threadCpuSeconds();
+                simplifier.simplifyMax(path);
+                const double s1 = threadCpuSeconds();
+                std::printf("%s,%d,%d,%.3f,%.4f,%.3f,%.4f\n", leg.map.c_str(), leg.leg, seed,
+                            (t1 - t0) * 1e6, first / leg.optimal, (s1 - s0) * 1e6,
+                            path.length() / leg.optimal);
                 continue;
             }
-            const auto path = pdef->getSolutionPath()->as<og::PathGeometric>();
-            std::printf("%s,%d,%d,%.3f,%.4f\n", leg.map.c_str(), leg.leg, seed, (t1 - t0) * 1e6,
-                        path->length() / leg.optimal);
+            // Informed RRT*: one solve for the longest budget; every improved solution is
+            // recorded with its CPU time (RRT* hands its path to the problem only at the end).
+            std::vector<std::pair<double, double>> found;  // (CPU seconds, length)
+            pdef->setIntermediateSolutionCallback(
+                [&](const ob::Planner *, const std::vector<const ob::State *> &,
+                    const ob::Cost c) { found.emplace_back(threadCpuSeconds() - t0, c.value()); });
+            const double most = budgets.empty() ? 10.0 : budgets.back();
+            planner->solve(ob::PlannerTerminationCondition([&]() {
+                const double t = threadCpuSeconds() - t0;
+                return t >= most || (budgets.empty() && !found.empty()) || t >= 10.0;
+            }));
+            double firstUs = -1.0, firstRatio = -1.0;
+            if (!found.empty()) {
+                firstUs = found.front().first * 1e6;
+                firstRatio = found.front().second / leg.optimal;
+            }
+            std::vector<double> costs;
+            for (double b : budgets) {
+                // The best length found within the budget (none before the first solution).
+                double best = -1.0;
+                for (const auto &[t, len] : found)
+                    if (t <= b && (best < 0.0 || len < best)) best = len;
+                costs.push_back(best);
+            }
+            if (seed == 0) continue;
+            std::printf("%s,%d,%d,", leg.map.c_str(), leg.leg, seed);
+            if (firstUs >= 0.0)
+                std::printf("%.3f,%.4f,,", firstUs, firstRatio);
+            else
+                std::printf(",,,");
+            for (double c : costs) {
+                if (c >= 0.0)
+                    std::printf(",%.5f", c / leg.optimal);
+                else
+                    std::printf(",");
+            }
+            std::printf("\n");
         }
     }
     return 0;

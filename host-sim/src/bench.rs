@@ -307,6 +307,11 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
 
 /// The planner name of the OMPL rows.
 pub const OMPL_RRT_CONNECT: &str = "OMPL RRT-Connect";
+/// The name of OMPL's RRT-Connect followed by its path simplifier (`simplifyMax`) in the output:
+/// first-solution time includes the simplifier's, the ratio is the simplified path's.
+pub const OMPL_RRT_CONNECT_SIMPLIFIED: &str = "OMPL RRT-Connect + simplify";
+/// The name of OMPL's Informed RRT* in the output (first solution, cost at every budget).
+pub const OMPL_INFORMED_RRT_STAR: &str = "OMPL Informed RRT*";
 
 /// Runs OMPL's RRT-Connect (the `benches/ompl` harness at `bin`) on one leg for `args.seeds`
 /// seeds: it reads the grid and the leg from files written to `out`, and answers one CSV row
@@ -323,13 +328,14 @@ fn ompl_leg(
     args: &BenchArgs,
 ) -> Result<Vec<BenchRow>> {
     let g = &s.map;
-    if f32::from_bits(g.cell_bits) != 1.0 {
-        return Err(anyhow!(
-            "--ompl: {} has cells of {} m; the harness takes 1 m cells",
-            s.name,
-            f32::from_bits(g.cell_bits)
-        ));
-    }
+    // The harness works in cells: the leg is handed over in cell units (the ratio to the
+    // optimum, and OMPL's range of 0.2 x the extent, do not depend on the unit).
+    let cell = f32::from_bits(g.cell_bits);
+    let (start, goal) = (
+        bi_am_rrt::Point::new(start.x / cell, start.y / cell),
+        bi_am_rrt::Point::new(goal.x / cell, goal.y / cell),
+    );
+    let opt_cells = opt / f64::from(cell);
     let dir = out.join("ompl");
     std::fs::create_dir_all(&dir)?;
     std::fs::write(dir.join(format!("{}.grid", s.name)), &g.bits)?;
@@ -337,57 +343,83 @@ fn ompl_leg(
     std::fs::write(
         &legs,
         format!(
-            "map,leg,sx,sy,gx,gy,optimal_m\n{},{leg},{:?},{:?},{:?},{:?},{opt:?}\n",
+            "map,leg,sx,sy,gx,gy,optimal_m\n{},{leg},{:?},{:?},{:?},{:?},{opt_cells:?}\n",
             s.name, start.x, start.y, goal.x, goal.y
         ),
     )?;
-    let output = std::process::Command::new(bin)
-        .arg(&legs)
-        .arg(&dir)
-        .arg(args.seeds.to_string())
-        .arg(format!("{}={}x{}", s.name, g.width, g.height))
-        .output()
-        .with_context(|| format!("running {}", bin.display()))?;
-    if !output.status.success() {
-        return Err(anyhow!(
-            "{} failed: {}",
-            bin.display(),
-            String::from_utf8_lossy(&output.stderr)
-        ));
-    }
-    let text = String::from_utf8(output.stdout)?;
+    let budgets: Vec<String> = args.budgets.iter().map(|b| b.to_string()).collect();
     let mut rows = Vec::new();
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        let [_, _, seed, us, ratio] = f[..] else {
-            return Err(anyhow!("{}: bad line {line:?}", bin.display()));
-        };
-        let num = |v: &str| -> Result<Option<f64>> {
-            Ok(if v.is_empty() { None } else { Some(v.parse()?) })
-        };
-        rows.push(BenchRow {
-            map: s.name.clone(),
-            leg,
-            planner: OMPL_RRT_CONNECT.to_string(),
-            seed: seed.parse()?,
-            optimal_m: opt,
-            first_us: num(us)?,
-            first_ratio: num(ratio)?,
-            first_nodes: None,
-            cost_ratio: vec![None; args.budgets.len()],
-            nodes: 0,
-            expansions_per_s: 0.0,
-            reads_per_expansion: 0.0,
-            full: false,
-        });
-    }
-    if rows.len() as u64 != args.seeds {
-        return Err(anyhow!(
-            "{}: {} rows for {} seeds",
-            bin.display(),
-            rows.len(),
-            args.seeds
-        ));
+    for planner in ["connect", "informed"] {
+        let output = std::process::Command::new(bin)
+            .arg(&legs)
+            .arg(&dir)
+            .arg(args.seeds.to_string())
+            .args(["--planner", planner, "--budgets", &budgets.join(",")])
+            .arg(format!("{}={}x{}", s.name, g.width, g.height))
+            .output()
+            .with_context(|| format!("running {}", bin.display()))?;
+        if !output.status.success() {
+            return Err(anyhow!(
+                "{} failed: {}",
+                bin.display(),
+                String::from_utf8_lossy(&output.stderr)
+            ));
+        }
+        let text = String::from_utf8(output.stdout)?;
+        let before = rows.len();
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            let (Some(&seed), Some(&us), Some(&ratio), Some(&simp_us), Some(&simp), Some(costs)) =
+                (f.get(2), f.get(3), f.get(4), f.get(5), f.get(6), f.get(7..))
+            else {
+                return Err(anyhow!("{}: bad line {line:?}", bin.display()));
+            };
+            let num = |v: &str| -> Result<Option<f64>> {
+                Ok(if v.is_empty() { None } else { Some(v.parse()?) })
+            };
+            let row = |name: &str, first_us: Option<f64>, first_ratio: Option<f64>, cost_ratio| {
+                Ok::<_, anyhow::Error>(BenchRow {
+                    map: s.name.clone(),
+                    leg,
+                    planner: name.to_string(),
+                    seed: seed.parse()?,
+                    optimal_m: opt,
+                    first_us,
+                    first_ratio,
+                    first_nodes: None,
+                    cost_ratio,
+                    nodes: 0,
+                    expansions_per_s: 0.0,
+                    reads_per_expansion: 0.0,
+                    full: false,
+                })
+            };
+            if planner == "connect" {
+                let none = vec![None; args.budgets.len()];
+                rows.push(row(OMPL_RRT_CONNECT, num(us)?, num(ratio)?, none.clone())?);
+                // RRT-Connect plus simplification: its time includes the simplifier's.
+                let total = match (num(us)?, num(simp_us)?) {
+                    (Some(a), Some(b)) => Some(a + b),
+                    _ => None,
+                };
+                rows.push(row(OMPL_RRT_CONNECT_SIMPLIFIED, total, num(simp)?, none)?);
+            } else {
+                let costs = costs.iter().map(|c| num(c)).collect::<Result<Vec<_>>>()?;
+                if costs.len() != args.budgets.len() {
+                    return Err(anyhow!("{}: bad line {line:?}", bin.display()));
+                }
+                rows.push(row(OMPL_INFORMED_RRT_STAR, num(us)?, num(ratio)?, costs)?);
+            }
+        }
+        let per_seed = if planner == "connect" { 2 } else { 1 };
+        if (rows.len() - before) as u64 != args.seeds * per_seed {
+            return Err(anyhow!(
+                "{} --planner {planner}: {} rows for {} seeds",
+                bin.display(),
+                (rows.len() - before) / per_seed as usize,
+                args.seeds
+            ));
+        }
     }
     Ok(rows)
 }

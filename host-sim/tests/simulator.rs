@@ -756,14 +756,21 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
     let dir = tempfile::tempdir().unwrap();
     let s = maps::builtin_by_name("open").unwrap();
     let script = dir.path().join("harness.sh");
-    // Arguments: LEGS.csv GRID_DIR SEEDS MAP=WxH. Answers (after checking that its inputs
-    // exist) seeds 1 and 2 solved in 7 and 9 us at 1.25 x the optimum, seed 3 unsolved.
+    // Arguments: LEGS.csv GRID_DIR SEEDS --planner P --budgets B MAP=WxH. Answers (after
+    // checking that its inputs exist) for RRT-Connect seeds 1 and 2 solved in 7 and 9 us at
+    // 1.25 x the optimum (simplified in 3 us to 1.05), seed 3 unsolved; for Informed RRT* seed
+    // 1 solved in 20 us at 1.5 and 1.1 at the budget, seed 2 solved after the budget, seed 3
+    // unsolved.
     std::fs::write(
         &script,
-        "#!/bin/sh\nset -e\nname=${4%%=*}\ntest -s \"$2/$name.grid\"\n\
+        "#!/bin/sh\nset -e\nname=${8%%=*}\ntest -s \"$2/$name.grid\"\n\
          leg=$(sed -n 2p \"$1\" | cut -d, -f2)\n\
-         echo map,leg,seed,first_us,first_ratio\n\
-         echo $name,$leg,1,7.0,1.25\necho $name,$leg,2,9.0,1.25\necho $name,$leg,3,,\n",
+         echo map,leg,seed,first_us,first_ratio,simplify_us,simplified_ratio,cost_ratio_$7\n\
+         if [ \"$5\" = connect ]; then\n\
+         echo $name,$leg,1,7.0,1.25,3.0,1.05\necho $name,$leg,2,9.0,1.25,3.0,1.05\n\
+         echo $name,$leg,3,,,,\nelse\n\
+         echo $name,$leg,1,20.0,1.5,,,1.1\necho $name,$leg,2,3000.0,1.5,,,\n\
+         echo $name,$leg,3,,,,,\nfi\n",
     )
     .unwrap();
     std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
@@ -793,7 +800,32 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
             _ => assert_eq!((r.first_us, r.first_ratio), (None, None)),
         }
     }
-    assert_eq!(rows.len(), 12);
+    let simplified: Vec<_> = rows
+        .iter()
+        .filter(|r| r.planner == host_sim::bench::OMPL_RRT_CONNECT_SIMPLIFIED)
+        .collect();
+    assert_eq!(simplified.len(), 6);
+    assert!(
+        simplified
+            .iter()
+            .any(|r| r.first_us == Some(10.0) && r.first_ratio == Some(1.05))
+    );
+    let informed: Vec<_> = rows
+        .iter()
+        .filter(|r| r.planner == host_sim::bench::OMPL_INFORMED_RRT_STAR)
+        .collect();
+    assert_eq!(informed.len(), 6);
+    for r in &informed {
+        match r.seed {
+            1 => assert_eq!(r.cost_ratio, vec![Some(1.1)]),
+            2 => assert_eq!(
+                (r.first_us, r.cost_ratio.clone()),
+                (Some(3000.0), vec![None])
+            ),
+            _ => assert_eq!(r.first_us, None),
+        }
+    }
+    assert_eq!(rows.len(), 24);
     // An unsolved seed counts as infinitely slow: the median of 7, 9 and never is 9.
     let md = std::fs::read_to_string(dir.path().join("out/summary.md")).unwrap();
     assert!(
