@@ -201,7 +201,7 @@ pub struct Stats {
     pub restarted: u32,
     /// States let in by the starving rule (a search whose density rule had turned away
     /// [`crate::search::STARVING`] states in a row admits a state no node is near; module
-    /// `search`), both trees. 0 on the paper's maps.
+    /// `search`), both trees (0 in 600 first-leg searches on the paper's maps).
     pub starving_admits: u32,
 }
 
