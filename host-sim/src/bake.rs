@@ -634,6 +634,33 @@ pub fn export_command(
 mod tests {
     use super::*;
 
+    /// Issue 23: `export` of a nav2 map fits the firmware's flash or says why not.
+    #[test]
+    fn export_fits_the_firmware_flash_or_says_why_not() {
+        let mut sc = crate::maps::builtin_by_name("office_200").unwrap();
+        let auto = TableOptions::default();
+        // The office: its own 128 KiB budget already fits.
+        let t = flash_table_options(&sc, &auto, FIRMWARE_DATA_BYTES).unwrap();
+        assert_eq!(t.max_bytes, auto.budget(40_000));
+        // A larger map: the table gets what the grid leaves.
+        sc.map = OwnedGrid::from_fn(600, 300, 0.05, |_, _| false).unwrap();
+        let t = flash_table_options(&sc, &auto, FIRMWARE_DATA_BYTES).unwrap();
+        assert_eq!(t.max_bytes, FIRMWARE_DATA_BYTES - sc.map.bits.len());
+        // A budget given by hand is kept.
+        let mut hand = auto;
+        hand.max_bytes = 50_000;
+        assert_eq!(
+            flash_table_options(&sc, &hand, FIRMWARE_DATA_BYTES)
+                .unwrap()
+                .max_bytes,
+            50_000
+        );
+        // Warehouse-sized: refused, naming the way out.
+        sc.map = OwnedGrid::from_fn(1006, 1674, 0.03, |_, _| false).unwrap();
+        let e = flash_table_options(&sc, &auto, FIRMWARE_DATA_BYTES).unwrap_err();
+        assert!(format!("{e}").contains("Down-sample the map"), "{e}");
+    }
+
     #[test]
     fn graph_file_round_trip() {
         let g = OwnedGrid::from_fn(9, 7, 1.0, |c, r| c == 4 && r > 1).unwrap();
