@@ -19,7 +19,8 @@
 //!   branches) sweep from the root towards the goal inside the informed ellipse. A node `x`
 //!   offers itself as parent to its neighbours, visited in order of decreasing `d_A(., goal)`;
 //!   unseen neighbours with a free segment form the frontier, pushed on the stack (the one
-//!   nearest the goal by the metric on top) and prepended to the queue. When the stack's top is
+//!   nearest the goal by the metric on top) and enqueued (first in, first out, as the paper's
+//!   Enqueue and Dequeue; it was last in, first out until issue 24). When the stack's top is
 //!   farther from the goal than `x` was, the branch stopped approaching: the stack is cleared.
 //! - **Goal rewiring, second kind** (Algorithms 5-6): `x_r1` popped (from the stack when it
 //!   holds more than two nodes, else from the queue) and `x_r2` peeked after it; inside the
@@ -51,6 +52,20 @@ pub(crate) struct Slice {
 }
 
 impl<const N: usize, const B: usize> TreeStore<N, B> {
+    /// The goal-rewiring queue's `Enqueue`: a frontier is added at the far end from where
+    /// [`TreeStore::dequeue_goal`] takes, so the queue is first in, first out (the paper: "the
+    /// addition of x to the end of Q"; the reference prepends the frontier and pops the
+    /// list's end). Whether the bounded queue took it.
+    pub(crate) fn enqueue_goal(&mut self, id: NodeId) -> bool {
+        self.goal_queue.push_front(id).is_ok()
+    }
+
+    /// The goal-rewiring queue's `Dequeue`: "removing and returning the first item" (the
+    /// oldest). Its next item, Algorithm 6's `x_r2`, is `goal_queue.back()`.
+    pub(crate) fn dequeue_goal(&mut self) -> Option<NodeId> {
+        self.goal_queue.pop_back()
+    }
+
     /// Makes `parent` the parent of `child` when that lowers `child`'s cost over a free
     /// segment. Returns whether the edge changed.
     pub(crate) fn try_rewire<M: Metric, C: Clock + ?Sized, const K: usize>(
@@ -223,11 +238,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 !self.goal_stack.is_empty()
             };
             let x1 = if from_stack {
-                self.goal_stack
-                    .pop()
-                    .or_else(|| self.goal_queue.pop_front())
+                self.goal_stack.pop().or_else(|| self.dequeue_goal())
             } else {
-                self.goal_queue.pop_front()
+                self.dequeue_goal()
             };
             let Some(x1) = x1 else {
                 continue;
@@ -237,7 +250,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             } else if from_stack {
                 self.goal_stack.last().copied()
             } else {
-                self.goal_queue.front().copied()
+                self.goal_queue.back().copied()
             };
             let x1_pos = self.pos(x1);
             if !inside(x1_pos) {
@@ -270,7 +283,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             for &f in frontier.iter().rev() {
                 // Refused by the full (bounded) queue: unseen again, so a later visit can
                 // queue it (it may still be on the stack).
-                if self.goal_queue.push_front(f).is_err() {
+                if !self.enqueue_goal(f) {
                     self.tree.unmark(f, Mark::Goal);
                 }
             }
@@ -286,6 +299,33 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 24, finding 1: the goal-rewiring queue pushed frontiers at its front and took
+    /// from its front too, a LIFO over frontier batches (the newest batch first). The paper's
+    /// Dequeue takes the first item, Enqueue adds at the end: batches come out in the order
+    /// they went in (within a batch, the reference's order: the frontier is prepended whole
+    /// and taken from the list's end, so its last node, the one nearest the goal, first).
+    #[test]
+    fn regression_the_goal_rewiring_queue_is_first_in_first_out() {
+        let mut store = TreeStore::<64, 16>::new();
+        store.reset(Point::new(1.0, 1.0));
+        let batch = |store: &mut TreeStore<64, 16>, ids: [u16; 2]| {
+            // As rewire_goal enqueues a frontier.
+            for &f in ids.iter().rev() {
+                assert!(store.enqueue_goal(NodeId(f)));
+            }
+        };
+        batch(&mut store, [1, 2]);
+        batch(&mut store, [3, 4]);
+        assert_eq!(
+            store.goal_queue.back(),
+            Some(&NodeId(2)),
+            "x_r2 peeks the next out"
+        );
+        let order: heapless::Vec<u16, 8> =
+            core::iter::from_fn(|| store.dequeue_goal().map(|n| n.0)).collect();
+        assert_eq!(order[..], [2, 1, 4, 3]);
+    }
     use crate::clock::FakeClock;
     use crate::config::Config;
     use crate::map::{Map, OccupancyGrid, pack_grid};

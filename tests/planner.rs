@@ -572,10 +572,12 @@ fn a_full_tuned_tree_keeps_improving() {
         runs.push(lengths);
     }
     // Measured (seeds 11-16, 200 calls of 20 ms): the paper's tree improves on no seed once
-    // full; the tuned one on four of six (78.9 -> 78.5, 78.5 -> 77.6, 83.6 -> 80.0, 94.5 ->
-    // 93.5 m; the optimum is 74.4 m: a 256-node tree on this map stalls short of it).
+    // full; the tuned one on two of six since the goal queue is first in, first out (issue
+    // 24: 80.1 -> 79.9, 91.1 -> 87.4 m; with the old last-in-first-out order four of six; the
+    // optimum is 74.4 m: a 256-node tree on this map stalls short of it). The order made no
+    // difference beyond seed noise in the benchmark (2,048 nodes, 5 seeds, cost at 1 s).
     let improved = |l: &[(f32, f32)]| l.iter().filter(|(full, end)| end < full).count();
-    assert!(improved(&runs[1]) >= 3, "tuned: {:?}", runs[1]);
+    assert!(improved(&runs[1]) >= 2, "tuned: {:?}", runs[1]);
     assert!(improved(&runs[1]) > improved(&runs[0]), "{runs:?}");
 }
 
