@@ -29,8 +29,14 @@ use crate::planner::{Planner, Progress};
 pub struct Protocol {
     /// Metres moved towards the waypoint per `plan` call (papers: 0.7).
     pub speed: f32,
-    /// Time between the goal joining the tree and the agent starting (papers: 0.25 s).
+    /// Time the agent waits before it starts (papers: 0.25 s), counted from the goal joining
+    /// the tree, or from the goal being set with `wait_from_set`.
     pub wait: Duration,
+    /// Count `wait` from when the goal is set, as the AM-RRT* reference's benchmark does
+    /// (`time.time() - goal_start_time > 0.25`); the agent still waits for the goal to join.
+    /// Off: from the join (this crate's protocol until issue 24, kept as the default so the
+    /// results stay comparable).
+    pub wait_from_set: bool,
     /// Calls before the run is abandoned.
     pub max_calls: u32,
     /// End the run after the call in which the goal joined the tree (search time only).
@@ -42,6 +48,7 @@ impl Default for Protocol {
         Self {
             speed: 0.7,
             wait: Duration::from_millis(250),
+            wait_from_set: false,
             max_calls: 3_000,
             stop_when_found: false,
         }
@@ -64,6 +71,12 @@ pub struct RunResult {
     pub calls: u32,
     /// Forward tree size when the goal joined.
     pub nodes_at_goal: Option<usize>,
+    /// Clock ticks from setting the goal to the end of the call in which it joined (the
+    /// reference's definition: it reads the time after `plan` returns).
+    pub search_ticks_call_end: Option<u64>,
+    /// Forward tree size at the end of the call in which the goal joined (the reference's
+    /// definition of nodes at goal).
+    pub nodes_at_call_end: Option<usize>,
     /// Cost of the tree's path from the root to the goal when the agent started moving (the
     /// root may already be a node ahead of the agent: it follows the agent's path).
     pub cost_at_start: Option<f32>,
@@ -99,7 +112,12 @@ where
         if let Some(found) = planner.stats().goal_found_at {
             res.search_ticks.get_or_insert(found.saturating_sub(t0));
             res.nodes_at_goal = planner.stats().nodes_at_goal;
-            if clock.now() >= found.saturating_add(wait) {
+            if res.search_ticks_call_end.is_none() {
+                res.search_ticks_call_end = Some(clock.now().saturating_sub(t0));
+                res.nodes_at_call_end = Some(planner.tree().len());
+            }
+            let from = if protocol.wait_from_set { t0 } else { found };
+            if clock.now() >= from.saturating_add(wait) {
                 if res.cost_at_start.is_none() {
                     res.cost_at_start = p.goal_cost.map(|c| c.length);
                 }

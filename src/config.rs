@@ -217,6 +217,13 @@ pub struct Config {
     /// first paths were the same either way (2,400 benchmark runs): a tree built by choosing
     /// each new node's best parent has little to rewire before it holds a path.
     pub rewire_while_searching: bool,
+    /// The trees' Meet tests every pair within `sigma` for a free segment, as the paper's
+    /// Meet ("true when the Euclidean distance between T_f and T_r is less than sigma and there
+    /// is no obstacle blocking it"): after the 16 cheapest pairs (by the joined path's cost)
+    /// the others in index order, until a free one or the call's deadline. Off (both named
+    /// sets): the 16 cheapest only, so a new node whose cheap partners are all behind a wall
+    /// waits for the next one (issue 24; office measured in `docs/results-notes.md`).
+    pub meet_all_pairs: bool,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -264,6 +271,7 @@ impl Config {
             nearest_step: false,
             reuse_tests: false,
             rewire_while_searching: true,
+            meet_all_pairs: false,
             profile: Profile::Paper,
         }
     }

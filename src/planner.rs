@@ -1024,10 +1024,28 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             cfg: &self.cfg,
             call: self.call,
         };
-        let Some(&(_, partner)) = best
+        let mut partner = best
             .iter()
             .find(|(_, id)| env.free(p, other.pos(*id), meter))
-        else {
+            .map(|&(_, id)| id);
+        // The paper's Meet: any pair within sigma with a free segment (Config::meet_all_pairs).
+        if partner.is_none() && self.cfg.meet_all_pairs && best.is_full() {
+            let call = self.call;
+            let _ = other
+                .index
+                .for_each_within(p, sigma, other.tree.positions(), |id, _| {
+                    if meter.expired(&call) {
+                        return core::ops::ControlFlow::Break(());
+                    }
+                    meter.charge(1);
+                    if best.iter().all(|&(_, b)| b != id) && env.free(p, other.pos(id), meter) {
+                        partner = Some(id);
+                        return core::ops::ControlFlow::Break(());
+                    }
+                    core::ops::ControlFlow::Continue(())
+                });
+        }
+        let Some(partner) = partner else {
             let mut blocked = heapless::Vec::new();
             for &(_, id) in &best {
                 let _ = blocked.push(id);
@@ -1171,6 +1189,63 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                     let _ = self.rev.tree.set_root(r);
                 }
                 false
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::FakeClock;
+    use crate::config::MetricKind;
+    use crate::map::{OccupancyGrid, pack_grid};
+    use crate::metric::Euclidean;
+    use rand_core::SeedableRng;
+
+    /// Issue 24, finding 7: Meet tested only the 16 cheapest pairs within `sigma`; with
+    /// `meet_all_pairs` (the paper's Meet) a free pair further down the list joins the trees.
+    /// A wall at x = 20 (y below 30); 16 cheap reverse nodes behind it, two dearer ones above
+    /// it, in sight of the new forward node.
+    #[test]
+    fn meet_all_pairs_finds_a_free_pair_beyond_the_cheapest_sixteen() {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(40, 40)];
+        pack_grid(&mut bits, 40, 40, |c, r| c == 20 && r < 30).unwrap();
+        let grid = OccupancyGrid::new(&bits, 40, 40, 1.0).unwrap();
+        for all in [false, true] {
+            let mut storage = Storage::<64, 16>::new();
+            let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(40.0);
+            cfg.meet_all_pairs = all;
+            let rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
+            let mut p = Planner::<_, _, 64, 16, 0>::new(
+                &mut storage,
+                Map::new(grid),
+                Euclidean,
+                rng,
+                cfg,
+                Point::new(10.0, 5.0),
+            )
+            .unwrap();
+            p.set_goal(Point::new(30.0, 5.0)).unwrap();
+            let root = p.fwd.tree.root().unwrap();
+            let new = p.fwd.insert(Point::new(10.0, 34.0), root, false).unwrap();
+            let rev_root = p.rev.tree.root().unwrap();
+            for k in 0..16u8 {
+                let y = 2.0 + 0.3 * f32::from(k);
+                p.rev.insert(Point::new(21.5, y), rev_root, false).unwrap();
+            }
+            let up = p
+                .rev
+                .insert(Point::new(30.0, 36.0), rev_root, false)
+                .unwrap();
+            p.rev.insert(Point::new(25.0, 36.0), up, false).unwrap();
+            let clock = FakeClock::nanos();
+            let meter = Meter::new(&clock);
+            p.call = Deadline::after(&clock, core::time::Duration::from_secs(1));
+            let met = p.try_meet(new, true, &meter).is_ok();
+            assert_eq!(met, all, "meet_all_pairs {all}");
+            if all {
+                assert!(p.goal_node().is_some(), "the goal joined through the meet");
             }
         }
     }

@@ -980,3 +980,38 @@ fn reusing_tests_changes_no_decision() {
         }
     }
 }
+
+/// Issue 24, findings 8 and 9: the reference counts the agent's wait from when the goal is
+/// set, and reads search time and nodes at goal after the call in which the goal joined. Both
+/// definitions are reported; the wait is counted either way (`Protocol::wait_from_set`).
+#[test]
+fn both_search_definitions_and_both_waits() {
+    let s = &builtin::BUG_TRAP;
+    let cfg = Config::rt_rrt(MetricKind::Euclidean);
+    let from_join = run(cfg, s, 3, Protocol::default());
+    let from_set = run(
+        cfg,
+        s,
+        3,
+        Protocol {
+            wait_from_set: true,
+            ..Protocol::default()
+        },
+    );
+    for r in [&from_join, &from_set] {
+        assert!(r.reached, "{r:?}");
+        let (at_join, at_end) = (r.search_ticks.unwrap(), r.search_ticks_call_end.unwrap());
+        assert!(at_join <= at_end, "{r:?}");
+        assert!(
+            r.nodes_at_goal.unwrap() <= r.nodes_at_call_end.unwrap(),
+            "{r:?}"
+        );
+    }
+    // Same search (same seed, same clock); counted from the set, the wait has partly passed
+    // when a slow search joins, so the agent starts no later.
+    assert_eq!(from_join.search_ticks, from_set.search_ticks);
+    assert!(
+        from_set.calls <= from_join.calls,
+        "{from_set:?} vs {from_join:?}"
+    );
+}

@@ -58,6 +58,8 @@ pub struct ExperimentArgs {
     pub jobs: Option<usize>,
     /// Reference-style rewiring budgets.
     pub faithful: bool,
+    /// The agent's wait counted from when the goal is set (`--wait-from-set`).
+    pub wait_from_set: bool,
     /// Keep the reverse tree's branches at the meet (`Config::keep_reverse_branches`).
     pub keep_reverse_branches: bool,
     /// Stop runs once the goal is in the tree.
@@ -135,6 +137,7 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
         clock: args.clock,
         goals: args.goals,
         faithful: args.faithful,
+        wait_from_set: args.wait_from_set,
         keep_reverse_branches: args.keep_reverse_branches,
         search_only: args.search_only,
         anytime_ms: args.anytime_ms,
@@ -155,6 +158,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
     };
     let protocol = Protocol {
         stop_when_found: args.search_only,
+        wait_from_set: args.wait_from_set,
         ..Protocol::default()
     };
     let (runs, final_nodes) = with_planner(prep, cfg, seed, |p| {
@@ -230,6 +234,8 @@ pub fn row(
             .map(|o| (g.result.travelled as f64 / o) as f32),
         collisions: g.result.collisions,
         nodes_at_goal: g.result.nodes_at_goal,
+        search_time_call_end_s: g.search_call_end_s,
+        nodes_at_call_end: g.result.nodes_at_call_end,
         calls: g.result.calls,
         cost_at_start_m: g.result.cost_at_start,
         anytime_cost_m,

@@ -104,6 +104,10 @@ pub struct Settings {
     pub t_exp_ms: Option<f64>,
     /// Diffusion table options, as text.
     pub table: String,
+    /// The agent's 0.25 s wait counted from when the goal is set (the reference's benchmark)
+    /// instead of from the join (absent in folders made before issue 24: false).
+    #[serde(default)]
+    pub wait_from_set: bool,
 }
 
 impl Settings {
@@ -276,6 +280,13 @@ pub struct Row {
     pub collisions: u32,
     /// Nodes in the forward tree when the goal joined.
     pub nodes_at_goal: Option<usize>,
+    /// Search time read at the end of the call in which the goal joined (the reference's
+    /// definition; absent in data made before issue 24).
+    #[serde(default)]
+    pub search_time_call_end_s: Option<f64>,
+    /// Forward tree size at the end of that call (the reference's nodes at goal).
+    #[serde(default)]
+    pub nodes_at_call_end: Option<usize>,
     pub calls: u32,
     /// The tree's path cost when the agent started moving.
     pub cost_at_start_m: Option<f32>,

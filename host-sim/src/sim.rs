@@ -193,6 +193,8 @@ pub struct GoalRun {
     pub result: RunResult,
     /// Search time in seconds on the run's clock.
     pub search_s: Option<f64>,
+    /// Search time read at the end of the call in which the goal joined.
+    pub search_call_end_s: Option<f64>,
 }
 
 /// Drives `planner` through `goals` (indices into the scenario's goals) in order.
@@ -214,10 +216,14 @@ pub fn drive<'s, 't, C: Clock + ?Sized>(
         let search_s = result
             .search_ticks
             .map(|t| t as f64 / clock.ticks_per_second() as f64);
+        let search_call_end_s = result
+            .search_ticks_call_end
+            .map(|t| t as f64 / clock.ticks_per_second() as f64);
         out.push(GoalRun {
             goal_index: gi,
             result,
             search_s,
+            search_call_end_s,
         });
         if !result.reached {
             break;
