@@ -13,7 +13,15 @@ use crate::error::ConfigError;
 pub enum Base {
     /// RT-RRT* (Naderi et al., 2015): goal-directed sampling on the segment from the goal's
     /// nearest node, an adaptive neighbourhood radius, random rewiring instead of goal
-    /// rewiring; the metric only chooses the nearest node.
+    /// rewiring; the metric only chooses the nearest node, and only when the Euclidean-nearest
+    /// node's segment to the sample is blocked. Departures from the AM-RRT* reference's RT-RRT*
+    /// (issue 24): `Nearest` is Euclidean-first for RT-RRT*(D) (the reference always takes the
+    /// node nearest by `d_A`); the goal line starts at the Euclidean-nearest node (the
+    /// reference: the `d_A`-nearest); steering stops at `e_max` and gives up when blocked (the
+    /// reference goes all the way, or to 99 % of the way to the obstacle; Table 2's `e_max` 5 m
+    /// supports ours); Bi-RT-RRT*'s reverse tree gets root rewiring only, no random rewiring;
+    /// the new rewiring (`-2`) can change only root rewiring (Algorithm 4), RT-RRT* having no
+    /// goal rewiring.
     RtRrt,
     /// AM-RRT* (Armstrong et al., 2021): goal sampling, metric-guided nearest node and
     /// steering, goal rewiring sorted by the metric.
@@ -84,7 +92,8 @@ pub struct Config {
     pub metric: MetricKind,
     /// Grow a reverse tree from the goal until the trees meet (suffix `-1`, prefix `Bi-`).
     pub bidirectional: bool,
-    /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`).
+    /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`). On RT-RRT*
+    /// only Algorithm 4 applies (it has no goal rewiring).
     pub new_rewiring: bool,
     /// When the trees meet, the reverse tree joins the forward tree *whole*, re-rooted at the
     /// meeting node (as far as the arena has room), instead of only its trunk from the meeting

@@ -27,6 +27,22 @@
 //!   ellipse, `x_r2` offers itself as parent to the nodes near `x_r1`. The paper's `len(S) > 1
 //!   or ...` clearing test is read as `and` (the notes), i.e. the same "stopped approaching"
 //!   test as the first kind.
+//! - **Where this departs from Algorithms 4-6 as printed** (issue 24; the audit is
+//!   `shared/notes/fidelity-audit.md`): (1) Algorithm 4 *peeks* `x_r2` where the paper
+//!   dequeues it, so the sweep advances one node per step, not two, and its printed cost
+//!   `Cost(x_r1) + d_E(x_r2, x_near) + d_E(x_r1, x_r2)` (never below `Cost(x_r1)`) is read as
+//!   the true cost `Cost(x_near) + d_E(x_near, x_r1)`. (2) Algorithm 6's clearing test is
+//!   printed `len(S) > 1 or d_A(Second(S), goal) > d_A(x_r1, goal) + d_A(x_r1, x_r2)`; read
+//!   with "or" it empties the stack whenever it holds two nodes; the code tests, for both
+//!   kinds, `d_A(top(S), goal) > d_A(x_r1, goal)` (the top, not `Second(S)`, and without the
+//!   slack `d_A(x_r1, x_r2)`), which is neither the printed test nor its "and" reading. (3)
+//!   Algorithm 6's cost test: the printed `Cost(x_r2) + d_E(x_r1, x_near) + d_E(x_r1, x_r2)`
+//!   (the way through `x_r1`, an upper bound) is replaced by the true cost of the new edge
+//!   `Cost(x_r2) + d_E(x_r2, x_near)`, which accepts more rewires, and the frontier's free
+//!   segment is tested from `x_r1` where the paper has `FreePath(x_near, x_r2)`. (4) The first
+//!   kind skips a node outside the ellipse before the clearing test (the reference runs it).
+//!   None of these is measured apart yet; the goal queue's order was a bug (fixed: first in,
+//!   first out).
 //! - **Path shortcuts** (tuned configurations, [`crate::Config::path_shortcuts`]; not in the
 //!   paper): a cursor walks the path from the goal towards the root, a few nodes per
 //!   expansion, and offers each node its grandparent as parent (Theta*'s any-angle step, Nash
