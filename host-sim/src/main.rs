@@ -342,7 +342,7 @@ enum Command {
         #[command(flatten)]
         table: TableArgs,
         /// Flash the firmware leaves to grid and table, in bytes: with `--max-bytes 0` the table
-        /// is kept within it (the firmware example: 150 KiB of its 256 KiB); a grid too large
+        /// is kept within it (the firmware example: 144 KiB of its 256 KiB); a grid too large
         /// for it is refused with the way out.
         #[arg(long, default_value_t = bake::FIRMWARE_DATA_BYTES)]
         flash_data: usize,
