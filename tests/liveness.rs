@@ -188,40 +188,29 @@ fn regression_case_3_a_full_arena_still_joins() {
     ] {
         let mut cfg = named.with_sigma(s.sigma);
         cfg.t_exp = Duration::from_millis(2);
-        for agent in [Agent::Holds, Agent::Follows] {
-            for seed in 1..=3 {
-                let (joined, nodes) = calls_to_join::<64, 64>(
-                    s.grid,
-                    cfg,
-                    Point::new(5.0, 5.0),
-                    Point::new(55.0, 55.0),
-                    agent,
-                    seed,
-                    1_500,
-                );
-                assert!(
-                    joined.is_some(),
-                    "{} seed {seed}, agent {agent:?}: {nodes} nodes",
-                    cfg.name()
-                );
-            }
-        }
+        let (start, goal) = (Point::new(5.0, 5.0), Point::new(55.0, 55.0));
+        joins_held_and_following::<64, 64>(s.grid, cfg, start, goal, 3);
     }
     let bits = rings_bits();
     let grid = OccupancyGrid::new(&bits, 120, 120, 1.0).unwrap();
     let mut cfg = Config::am_rrt(MetricKind::Euclidean).tuned();
     cfg.t_exp = Duration::from_millis(20);
+    let (start, goal) = (Point::new(60.0, 60.0), Point::new(5.0, 115.0));
+    joins_held_and_following::<256, 256>(grid, cfg, start, goal, 2);
+}
+
+/// Asserts that the goal joins within 1,500 calls for seeds `1..=seeds`, the agent held and
+/// following.
+fn joins_held_and_following<const N: usize, const B: usize>(
+    grid: OccupancyGrid<'_>,
+    cfg: Config,
+    start: Point,
+    goal: Point,
+    seeds: u64,
+) {
     for agent in [Agent::Holds, Agent::Follows] {
-        for seed in 1..=2 {
-            let (joined, nodes) = calls_to_join::<256, 256>(
-                grid,
-                cfg,
-                Point::new(60.0, 60.0),
-                Point::new(5.0, 115.0),
-                agent,
-                seed,
-                1_500,
-            );
+        for seed in 1..=seeds {
+            let (joined, nodes) = calls_to_join::<N, B>(grid, cfg, start, goal, agent, seed, 1_500);
             assert!(
                 joined.is_some(),
                 "{} seed {seed}, agent {agent:?}: {nodes} nodes",
