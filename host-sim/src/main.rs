@@ -146,6 +146,11 @@ enum Command {
         /// benchmark does (default: from when the goal joins the tree).
         #[arg(long)]
         wait_from_set: bool,
+        /// Work per call: `full` (as much as t_exp allows here) or `paper` (the paper's pace:
+        /// 20 expansions and 8 rewiring visits per phase and expansion, every call lasting
+        /// its full t_exp on the virtual clock; needs --clock virtual).
+        #[arg(long, value_enum, default_value = "full")]
+        pace: host_sim::results::Pace,
         /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
         /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
         /// proportional to the map's size off that range; README "Lengths that follow the map").
@@ -504,6 +509,7 @@ fn main() -> Result<()> {
             overwrite,
             out,
             wait_from_set,
+            pace,
             paper_lengths,
         } => {
             let mut scs = maps::load_scenarios(&scenarios, names.as_deref())?;
@@ -512,6 +518,7 @@ fn main() -> Result<()> {
             }
             experiment::run(&ExperimentArgs {
                 wait_from_set,
+                pace,
                 shard,
                 existing: if resume {
                     experiment::Existing::Resume

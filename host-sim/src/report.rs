@@ -517,7 +517,10 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         settings
             .t_exp_ms
             .map_or("150 ms (the paper's)".into(), |t| format!("{t} ms")),
-        if settings.faithful {
+        if settings.pace == crate::results::Pace::Paper {
+            "at the paper's pace (20 expansions per call, 8 visits per phase and expansion, \
+             every call lasting its full t_exp)"
+        } else if settings.faithful {
             "the reference's time budgets"
         } else {
             "24 visits per phase and expansion"

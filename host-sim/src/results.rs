@@ -43,6 +43,19 @@ pub enum Goals {
     All,
 }
 
+/// How much a `plan` call computes (`experiment --pace`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Pace {
+    /// As much as `t_exp` allows on this implementation (over a thousand expansions).
+    #[default]
+    Full,
+    /// The paper's pace ([`crate::experiment::PAPER_EXPANSIONS_PER_CALL`] expansions and
+    /// [`crate::experiment::PAPER_VISITS`] rewiring visits per phase and expansion), every call
+    /// lasting its full `t_exp` on the virtual clock, as a call of the paper's Python did.
+    Paper,
+}
+
 /// A scenario as the manifest names it: its name and a digest of what a run depends on.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ScenarioId {
@@ -108,6 +121,9 @@ pub struct Settings {
     /// instead of from the join (absent in folders made before issue 24: false).
     #[serde(default)]
     pub wait_from_set: bool,
+    /// Work per call (absent in folders made before issue 24: full).
+    #[serde(default)]
+    pub pace: Pace,
 }
 
 impl Settings {

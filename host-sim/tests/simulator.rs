@@ -63,6 +63,58 @@ fn scenario_files_read_pngs_with_the_mean_rule() {
     assert!(maps::load_scenarios(&file, Some(&["nope".to_string()])).is_err());
 }
 
+/// Issue 24: at the paper's pace a call makes at most 20 expansions and lasts its full
+/// `t_exp` on the virtual clock, so the end-of-call search time is a whole number of calls;
+/// the wall clock is refused.
+#[test]
+fn the_paper_pace_makes_every_call_last_its_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_builtin_file(dir.path());
+    let out = dir.path().join("out");
+    let mut args = ExperimentArgs {
+        scenarios: maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap(),
+        planners: experiment::parse_planners("AM-RRT*(E),Bi-AM-RRT*(E)").unwrap(),
+        repeats: 2,
+        clock: ClockKind::Virtual,
+        goals: Goals::First,
+        seed: 1,
+        jobs: Some(2),
+        faithful: false,
+        wait_from_set: false,
+        pace: host_sim::results::Pace::Paper,
+        keep_reverse_branches: false,
+        search_only: true,
+        anytime_ms: 0,
+        table: TableOptions::default(),
+        t_exp: None,
+        shard: None,
+        existing: Existing::Refuse,
+        out: out.clone(),
+    };
+    experiment::run(&args).unwrap();
+    let mut rdr = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let rows: Vec<host_sim::results::Row> = rdr.deserialize().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        let end = r.search_time_call_end_s.unwrap();
+        let calls = end / 0.15;
+        assert!(
+            (calls - calls.round()).abs() < 1e-3,
+            "{end} s is not whole calls"
+        );
+        assert!(
+            calls.round() as u32 == r.calls,
+            "{end} s for {} calls",
+            r.calls
+        );
+        // 20 expansions a call at most: the tree grows by at most 20 nodes a call.
+        assert!(r.nodes_at_call_end.unwrap() <= 1 + 20 * r.calls as usize);
+    }
+    args.clock = ClockKind::Wall;
+    args.existing = Existing::Overwrite;
+    assert!(experiment::run(&args).is_err());
+}
+
 #[test]
 fn the_experiment_writes_one_row_per_run() {
     let dir = tempfile::tempdir().unwrap();
@@ -78,6 +130,7 @@ fn the_experiment_writes_one_row_per_run() {
         jobs: Some(2),
         faithful: false,
         wait_from_set: false,
+        pace: host_sim::results::Pace::Full,
         keep_reverse_branches: true,
         search_only: false,
         anytime_ms: 5,
@@ -170,6 +223,7 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
         jobs: Some(2),
         faithful: false,
         wait_from_set: false,
+        pace: host_sim::results::Pace::Full,
         keep_reverse_branches: false,
         search_only: true,
         anytime_ms: 0,
@@ -867,23 +921,26 @@ fn a_short_soak_changes_goals_and_stays_safe() {
 fn docs_results_is_the_report_of_its_data() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let docs = root.join("docs");
-    let notes = std::fs::read_to_string(docs.join("results-notes.md")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("results.md");
-    let command = "host-sim report --results docs/results-data --out docs/results.md --notes docs/results-notes.md";
-    host_sim::report::report(&docs.join("results-data"), &out, command, Some(&notes)).unwrap();
-    let made = std::fs::read_to_string(&out).unwrap();
-    let committed = std::fs::read_to_string(docs.join("results.md")).unwrap();
-    // The folder path in the text is the one given; the committed page was made from the
-    // repository root.
-    let made = made.replace(
-        &docs.join("results-data").display().to_string(),
-        "docs/results-data",
-    );
-    assert!(
-        made == committed,
-        "docs/results.md is stale: regenerate it with {command}"
-    );
+    // Full speed (results.md) and the paper's pace (results-pace.md).
+    for page in ["results", "results-pace"] {
+        let notes = std::fs::read_to_string(docs.join(format!("{page}-notes.md"))).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(format!("{page}.md"));
+        let command = format!(
+            "host-sim report --results docs/{page}-data --out docs/{page}.md --notes docs/{page}-notes.md"
+        );
+        let data = docs.join(format!("{page}-data"));
+        host_sim::report::report(&data, &out, &command, Some(&notes)).unwrap();
+        let made = std::fs::read_to_string(&out).unwrap();
+        let committed = std::fs::read_to_string(docs.join(format!("{page}.md"))).unwrap();
+        // The folder path in the text is the one given; the committed page was made from the
+        // repository root.
+        let made = made.replace(&data.display().to_string(), &format!("docs/{page}-data"));
+        assert!(
+            made == committed,
+            "docs/{page}.md is stale: regenerate it with {command}"
+        );
+    }
 }
 
 /// Issue 23: a map computed on its table's pieces agrees with the one computed on every cell.
