@@ -389,6 +389,8 @@ const PAPER_CLAIMS: &[(&str, &str)] = &[
 struct Cell {
     runs: usize,
     reached: usize,
+    /// Runs in which goal 1 joined the tree (all a `--search-only` run measures).
+    found: usize,
     collisions: u32,
     search_s: Vec<f64>,
     path_m: Vec<f64>,
@@ -402,6 +404,7 @@ impl Cell {
         Self {
             runs: rows.len(),
             reached: reached.len(),
+            found: rows.iter().filter(|r| r.search_time_s.is_some()).count(),
             collisions: rows.iter().map(|r| r.collisions).sum(),
             search_s: rows.iter().filter_map(|r| r.search_time_s).collect(),
             path_m: reached.iter().map(|r| f64::from(r.path_length_m)).collect(),
@@ -690,9 +693,15 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         let _ = writeln!(md, "### {m}\n");
         let _ = writeln!(
             md,
-            "| planner | reached | search ms, median [IQR] | search ms, mean | path m, mean | \
+            "| planner | {} | search ms, median [IQR] | search ms, mean | path m, mean | \
              travelled / optimal, median [IQR] | nodes at goal, median | change: search | \
-             change: path |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+             change: path |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+            // A --search-only run stops when the goal joins: it counts goals found.
+            if settings.search_only {
+                "found"
+            } else {
+                "reached"
+            }
         );
         for p in &planners {
             let c = cell(p, m);
@@ -704,7 +713,11 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             let _ = writeln!(
                 md,
                 "| {p} | {}/{}{} | {} [{}, {}] | {} | {} | {} [{}, {}] | {} | {} | {} |",
-                c.reached,
+                if settings.search_only {
+                    c.found
+                } else {
+                    c.reached
+                },
                 c.runs,
                 if c.collisions > 0 {
                     format!(" ({} collisions)", c.collisions)

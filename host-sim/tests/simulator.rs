@@ -110,6 +110,13 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
         // 20 expansions a call at most: the tree grows by at most 20 nodes a call.
         assert!(r.nodes_at_call_end.unwrap() <= 1 + 20 * r.calls as usize);
     }
+    // A search-only folder's report counts goals found (it used to read "reached 0/2").
+    let md = out.join("report.md");
+    host_sim::report::report(&out, &md, "report", None).unwrap();
+    let md = std::fs::read_to_string(md).unwrap();
+    assert!(md.contains("| planner | found |"), "{md}");
+    assert!(md.contains("| AM-RRT*(E) | 2/2 |"), "{md}");
+    assert!(md.contains("at the paper's pace"), "{md}");
     args.clock = ClockKind::Wall;
     args.existing = Existing::Overwrite;
     assert!(experiment::run(&args).is_err());
@@ -320,9 +327,10 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     );
     assert!(text.contains("![fig6c](results/fig6c.svg)"), "{text}");
     assert!(text.contains("| (c) both (Bi-) | maze |"), "{text}");
+    // Issue 24: search-only runs do not arrive; the report counts the goals they found.
     assert!(
-        text.contains("| Bi-AM-RRT*(E) | 0/2 |"),
-        "search-only runs do not arrive: {text}"
+        text.contains("| planner | found |") && text.contains("| Bi-AM-RRT*(E) | 2/2 |"),
+        "search-only runs count goals found: {text}"
     );
 }
 
