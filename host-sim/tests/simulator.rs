@@ -929,8 +929,8 @@ fn a_short_soak_changes_goals_and_stays_safe() {
 fn docs_results_is_the_report_of_its_data() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let docs = root.join("docs");
-    // Full speed (results.md) and the paper's pace (results-pace.md).
-    for page in ["results", "results-pace"] {
+    // Full speed (results.md), the paper's pace (results-pace.md), its sigma study.
+    for page in ["results", "results-pace", "results-sigma"] {
         let notes = std::fs::read_to_string(docs.join(format!("{page}-notes.md"))).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(format!("{page}.md"));
