@@ -439,6 +439,15 @@ fn pct(v: Option<f64>) -> String {
     v.map_or_else(|| "-".into(), |p| format!("{p:+.1} %"))
 }
 
+/// A change with the Mann-Whitney p-value of the two samples behind it, e.g. `-0.4 % (p
+/// 0.62)`: a p above 0.05 means the change is within seed noise.
+fn pct_p(v: Option<f64>, orig: &[f64], new: &[f64]) -> String {
+    match (v, crate::stats::mann_whitney_p(orig, new)) {
+        (Some(c), Some(p)) => format!("{c:+.1} % (p {p:.2})"),
+        (v, _) => pct(v),
+    }
+}
+
 fn opt(v: Option<f64>, scale: f64) -> String {
     v.map_or_else(|| "-".into(), |x| num(x * scale))
 }
@@ -687,7 +696,9 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
     let _ = writeln!(
         md,
         "Search time: goal set until the goal joins the forward tree, on the run's clock. Path: \
-         travelled by the agent. Change: mean against the planner's original (Table 1 row 1).\n"
+         travelled by the agent. Change: mean against the planner's original (Table 1 row 1), \
+         with the two-sided Mann-Whitney p-value of the two samples (seeds): p above 0.05, the \
+         change is within seed noise.\n"
     );
     for m in &maps {
         let _ = writeln!(md, "### {m}\n");
@@ -733,12 +744,18 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 r.q1.map_or("-".into(), |v| format!("{v:.3}")),
                 r.q3.map_or("-".into(), |v| format!("{v:.3}")),
                 opt(Spread::of(c.nodes.clone()).median, 1.0),
-                pct(orig
-                    .as_ref()
-                    .and_then(|o| change(o.search_mean(), c.search_mean()))),
-                pct(orig
-                    .as_ref()
-                    .and_then(|o| change(o.path_mean(), c.path_mean()))),
+                orig.as_ref().map_or_else(
+                    || "-".into(),
+                    |o| pct_p(
+                        change(o.search_mean(), c.search_mean()),
+                        &o.search_s,
+                        &c.search_s
+                    )
+                ),
+                orig.as_ref().map_or_else(
+                    || "-".into(),
+                    |o| pct_p(change(o.path_mean(), c.path_mean()), &o.path_m, &c.path_m)
+                ),
             );
         }
         let _ = writeln!(md, "\n![box plots of {m}]({rel}/box-{m}.svg)\n");
