@@ -341,6 +341,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             return Err(InputError::Unreachable);
         }
         self.stats = Stats::default();
+        self.fwd.holes = 0;
+        self.rev.holes = 0;
         self.begin_search(goal);
         Ok(())
     }
@@ -824,13 +826,6 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
-    /// Counts in the stats the states the starving rule let in since both trees held `before`.
-    fn note_holes(&mut self, before: u32) {
-        let now = self.fwd.holes.saturating_add(self.rev.holes);
-        let new = now.saturating_sub(before);
-        self.stats.starving_admits = self.stats.starving_admits.saturating_add(new);
-    }
-
     /// One expansion of each growing tree and the rewiring after it.
     fn step<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, call: Deadline) {
         let env = Env {
@@ -839,13 +834,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             cfg: &self.cfg,
             call: self.call,
         };
-        let holes = self.fwd.holes.saturating_add(self.rev.holes);
         let grown = self
             .fwd
             .expand(&env, &mut self.rng, self.goal.as_mut(), meter);
         self.full |= grown.full;
         self.stats.expansions = self.stats.expansions.saturating_add(1);
-        self.note_holes(holes);
+        self.stats.starving_admits = self.fwd.holes.saturating_add(self.rev.holes);
         if grown.goal_joined {
             self.goal_joined(meter);
         } else if let (Some(a), true) = (grown.added, self.rev_goal.is_some())
@@ -886,13 +880,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         // The reverse tree, while the goal is not in the forward tree.
         if self.rev_goal.is_some() {
-            let holes = self.fwd.holes.saturating_add(self.rev.holes);
             let grown = self
                 .rev
                 .expand(&env, &mut self.rng, self.rev_goal.as_mut(), meter);
             self.full |= grown.full;
             self.stats.reverse_expansions = self.stats.reverse_expansions.saturating_add(1);
-            self.note_holes(holes);
+            self.stats.starving_admits = self.fwd.holes.saturating_add(self.rev.holes);
             if let Some(b) = grown.added
                 && let Err(blocked) = self.try_meet(b, false, meter)
             {

@@ -132,7 +132,8 @@ pub struct TreeStore<const N: usize, const B: usize> {
     /// States the density rule turned away in a row while the tree's goal is not in it
     /// (saturating): from [`STARVING`] on, the tree is starving (module docs).
     pub(crate) refused: u16,
-    /// States let in by the starving rule since the storage was made (saturating).
+    /// States let in by the starving rule since the goal was set (saturating; the planner
+    /// zeroes it with its stats).
     pub(crate) holes: u32,
 }
 
@@ -614,8 +615,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // `e_max` disc) is let in, so no region whose way out is narrow stays closed.
         let spacing = cfg.e_max / libm::sqrtf(f32::from(n_max.max(1)));
         let hole = searching && self.refused >= STARVING && nearest_sq > spacing * spacing;
-        let dense = !(found < n_max as usize || far_sample || is_goal || exempt || hole);
-        let by_hole = hole && !(found < n_max as usize || far_sample || is_goal || exempt);
+        let room = found < n_max as usize || far_sample || is_goal || exempt;
+        let by_hole = hole && !room;
+        let dense = !room && !hole;
         // A dense neighbourhood inside the ellipse may still trade (tuned): its worst leaf
         // for a state that bounds a shorter path.
         let swap = match (&view, target.as_deref()) {
