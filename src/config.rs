@@ -69,6 +69,64 @@ pub enum RewireMode {
     },
 }
 
+/// Which parts of Algorithms 4 and 6 run exactly as printed (issue 24). The paper's
+/// reading of each is available here, one switch per departure so each can be measured
+/// apart; [`AsPrinted::NONE`] (both named sets) is this crate's reading, documented in
+/// `rewire.rs`. Algorithm 4's printed cost test (`Cost(x_r1) + ...` against `Cost(x_r1)`)
+/// can never pass and has no switch: its reading is always the true cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AsPrinted {
+    /// Algorithm 4 dequeues `x_r2` (the sweep takes two nodes per step, and `x_r2` gets no
+    /// turn of its own); off: `x_r2` is peeked and visited later as `x_r1`.
+    pub alg4_takes_x_r2: bool,
+    /// Algorithm 6 pops (or dequeues) `x_r2`; off: peeked.
+    pub alg6_takes_x_r2: bool,
+    /// Algorithm 6's printed cost test: `x_r2` becomes the parent of `x_near` when
+    /// `Cost(x_r2) + d_E(x_r1, x_near) + d_E(x_r1, x_r2) < Cost(x_near)` (the way through
+    /// `x_r1`, an upper bound of the new edge's cost) over a free `x_near`-`x_r2` segment, and
+    /// the frontier is the neighbours with a free segment to `x_r2`. Off: the new edge's true
+    /// cost `Cost(x_r2) + d_E(x_r2, x_near)`, the frontier tested from `x_r1`.
+    pub alg6_cost: bool,
+    /// Algorithm 6's printed clearing test with its "or" read as "and" (read with "or" it
+    /// empties the stack whenever it holds two nodes): `len(S) > 1` and `d_A(Second(S),
+    /// goal) > d_A(x_r1, goal) + d_A(x_r1, x_r2)`. Off: `d_A(top(S), goal) > d_A(x_r1,
+    /// goal)`, the first kind's test.
+    pub alg6_clear: bool,
+}
+
+impl AsPrinted {
+    /// This crate's reading of every part (the named sets).
+    pub const NONE: Self = Self {
+        alg4_takes_x_r2: false,
+        alg6_takes_x_r2: false,
+        alg6_cost: false,
+        alg6_clear: false,
+    };
+    /// Every part as printed.
+    pub const ALL: Self = Self {
+        alg4_takes_x_r2: true,
+        alg6_takes_x_r2: true,
+        alg6_cost: true,
+        alg6_clear: true,
+    };
+    /// The switches' names, as `host-sim --as-printed` takes them.
+    pub const NAMES: [&'static str; 4] = ["alg4-take", "alg6-take", "alg6-cost", "alg6-clear"];
+
+    /// Sets the switch named `name` (one of [`AsPrinted::NAMES`]); whether the name is known.
+    pub fn set(&mut self, name: &str, on: bool) -> bool {
+        let field = match name {
+            "alg4-take" => &mut self.alg4_takes_x_r2,
+            "alg6-take" => &mut self.alg6_takes_x_r2,
+            "alg6-cost" => &mut self.alg6_cost,
+            "alg6-clear" => &mut self.alg6_clear,
+            _ => return false,
+        };
+        *field = on;
+        true
+    }
+}
+
 /// Which parameter set a configuration carries. The planner reads only the fields; the
 /// profile labels the set in names and reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -233,6 +291,9 @@ pub struct Config {
     /// sets): the 16 cheapest only, so a new node whose cheap partners are all behind a wall
     /// waits for the next one (issue 24; office measured in `docs/results-notes.md`).
     pub meet_all_pairs: bool,
+    /// Which parts of Algorithms 4 and 6 run as printed ([`AsPrinted`]; both named sets:
+    /// none).
+    pub as_printed: AsPrinted,
     /// The parameter set's label (names and reports).
     pub profile: Profile,
 }
@@ -281,6 +342,7 @@ impl Config {
             reuse_tests: false,
             rewire_while_searching: true,
             meet_all_pairs: false,
+            as_printed: AsPrinted::NONE,
             profile: Profile::Paper,
         }
     }

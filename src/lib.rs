@@ -125,7 +125,7 @@ mod slots;
 pub mod sweep;
 pub mod tree;
 
-pub use config::{Base, Config, MetricKind, Profile, RewireMode};
+pub use config::{AsPrinted, Base, Config, MetricKind, Profile, RewireMode};
 pub use geometry::Point;
 pub use map::{Circle, Map, OccupancyGrid};
 pub use metric::{DiffusionTable, Euclidean, Metric};

@@ -41,8 +41,11 @@
 //!   `Cost(x_r2) + d_E(x_r2, x_near)`, which accepts more rewires, and the frontier's free
 //!   segment is tested from `x_r1` where the paper has `FreePath(x_near, x_r2)`. (4) The first
 //!   kind skips a node outside the ellipse before the clearing test (the reference runs it).
-//!   None of these is measured apart yet; the goal queue's order was a bug (fixed: first in,
-//!   first out).
+//!   (1)-(3) are switches of [`crate::AsPrinted`] (`Config::as_printed`, off in both named
+//!   sets), one per departure: with them on, Algorithms 4 and 6 run as printed (the clearing
+//!   test with "or" read as "and"). Measured one at a time at the paper's pace, 25 seeds
+//!   (`docs/results-printed.md`): none moves a path length, search time or node count
+//!   outside seed noise. The goal queue's order was a bug (fixed: first in, first out).
 //! - **Path shortcuts** (tuned configurations, [`crate::Config::path_shortcuts`]; not in the
 //!   paper): a cursor walks the path from the goal towards the root, a few nodes per
 //!   expansion, and offers each node its grandparent as parent (Theta*'s any-angle step, Nash
@@ -91,12 +94,31 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         child: NodeId,
         meter: &Meter<'_, C>,
     ) -> bool {
+        self.try_rewire_via(env, parent, child, None, false, meter)
+    }
+
+    /// [`TreeStore::try_rewire`], the cost compared being that of the way `parent` - `via` -
+    /// `child` when `via` is given (Algorithm 6 as printed; never below the new edge's own
+    /// cost, so the child's cost still falls). `known_free`: the caller tested the segment.
+    pub(crate) fn try_rewire_via<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        parent: NodeId,
+        child: NodeId,
+        via: Option<Point>,
+        known_free: bool,
+        meter: &Meter<'_, C>,
+    ) -> bool {
         if parent == child || self.tree.parent(child) == Some(parent) {
             return false;
         }
         let (pp, pc) = (self.pos(parent), self.pos(child));
-        let new = self.cost(parent).extend(pp.dist(pc), false);
-        if new >= self.cost(child) || !env.free(pp, pc, meter) {
+        let length = match via {
+            Some(v) => pp.dist(v) + v.dist(pc),
+            None => pp.dist(pc),
+        };
+        let new = self.cost(parent).extend(length, false);
+        if new >= self.cost(child) || !(known_free || env.free(pp, pc, meter)) {
             return false;
         }
         // The edge change refreshes the moved subtree's costs: charge its size too.
@@ -168,9 +190,15 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             let Some(x1) = self.root_queue.pop_front() else {
                 return;
             };
-            // Second kind: search around the next node in line, which stays queued.
+            // Second kind: search around the next node in line, which stays queued (or is
+            // taken too, Algorithm 4 as printed).
             let center = match self.root_queue.front() {
-                Some(&x2) if second_kind && self.root_queue.len() >= 2 => x2,
+                Some(&x2) if second_kind && self.root_queue.len() >= 2 => {
+                    if env.cfg.as_printed.alg4_takes_x_r2 {
+                        self.root_queue.pop_front();
+                    }
+                    x2
+                }
                 _ => x1,
             };
             self.nearby(self.pos(center), radius, &mut near, meter);
@@ -261,12 +289,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             let Some(x1) = x1 else {
                 continue;
             };
-            let x2 = if !second_kind {
-                None
-            } else if from_stack {
-                self.goal_stack.last().copied()
-            } else {
-                self.goal_queue.back().copied()
+            let printed = env.cfg.as_printed;
+            let x2 = match (second_kind, from_stack, printed.alg6_takes_x_r2) {
+                (false, _, _) => None,
+                (true, true, false) => self.goal_stack.last().copied(),
+                (true, true, true) => self.goal_stack.pop(),
+                (true, false, false) => self.goal_queue.back().copied(),
+                (true, false, true) => self.dequeue_goal(),
             };
             let x1_pos = self.pos(x1);
             if !inside(x1_pos) {
@@ -283,11 +312,22 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             sort_small_by(&mut keyed, |a, b| b.0.total_cmp(&a.0));
             frontier.clear();
             let parent = x2.unwrap_or(x1);
+            // Algorithm 6's printed cost test: the way through x_r1, and the segments tested
+            // from x_r2 (AsPrinted::alg6_cost).
+            let printed_cost = printed.alg6_cost && x2.is_some();
+            let (via, seen_from) = if printed_cost {
+                (Some(x1_pos), self.pos(parent))
+            } else {
+                (None, x1_pos)
+            };
             for &(_, x_near) in keyed.iter() {
                 meter.charge(1);
-                self.try_rewire(env, parent, x_near, meter);
+                if printed_cost && !env.free(seen_from, self.pos(x_near), meter) {
+                    continue;
+                }
+                self.try_rewire_via(env, parent, x_near, via, printed_cost, meter);
                 if !self.tree.marked(x_near, Mark::Goal)
-                    && env.free(x1_pos, self.pos(x_near), meter)
+                    && (printed_cost || env.free(seen_from, self.pos(x_near), meter))
                     && frontier.push(x_near).is_ok()
                 {
                     self.tree.mark(x_near, Mark::Goal);
@@ -303,9 +343,23 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     self.tree.unmark(f, Mark::Goal);
                 }
             }
-            if let Some(&top) = self.goal_stack.last()
-                && env.metric_to(self.pos(top), &to_goal, meter) > d1
-            {
+            let clear = if second_kind && printed.alg6_clear {
+                // len(S) > 1 and d_A(Second(S), goal) > d_A(x_r1, goal) + d_A(x_r1, x_r2).
+                // Second(S): the node under the top (none when the stack holds one or none).
+                let second = self.goal_stack.iter().rev().nth(1).copied();
+                second.is_some_and(|second| {
+                    let slack = match x2 {
+                        Some(x2) => env.metric_to(x1_pos, &env.metric.prepare(self.pos(x2)), meter),
+                        None => 0.0,
+                    };
+                    env.metric_to(self.pos(second), &to_goal, meter) > d1 + slack
+                })
+            } else {
+                self.goal_stack
+                    .last()
+                    .is_some_and(|&top| env.metric_to(self.pos(top), &to_goal, meter) > d1)
+            };
+            if clear {
                 self.goal_stack.clear();
             }
         }
@@ -343,7 +397,7 @@ mod tests {
         assert_eq!(order[..], [2, 1, 4, 3]);
     }
     use crate::clock::FakeClock;
-    use crate::config::Config;
+    use crate::config::{AsPrinted, Config};
     use crate::map::{Map, OccupancyGrid, pack_grid};
     use crate::metric::Euclidean;
 
@@ -355,6 +409,139 @@ mod tests {
             last = store.insert(*p, last, false).unwrap();
         }
         last
+    }
+
+    /// An empty 20 x 20 m map and a configuration with `printed`.
+    fn open_map(bits: &mut [u8]) -> (Map<'_, 1>, Config) {
+        pack_grid(bits, 20, 20, |_, _| false).unwrap();
+        let map = Map::new(OccupancyGrid::new(bits, 20, 20, 1.0).unwrap());
+        (map, Config::bi_am_rrt(crate::MetricKind::Euclidean))
+    }
+
+    #[test]
+    fn algorithm_4_as_printed_takes_x_r2_out_of_the_queue() {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        let (map, base) = open_map(&mut bits);
+        let front_after_one_step = |take: bool| {
+            let mut cfg = base;
+            cfg.as_printed.alg4_takes_x_r2 = take;
+            let env = Env {
+                map: &map,
+                metric: &Euclidean,
+                cfg: &cfg,
+                call: Deadline::NEVER,
+            };
+            let clock = FakeClock::new(1);
+            let meter = Meter::new(&clock);
+            let mut store = TreeStore::<64, 16>::new();
+            assert!(store.index.reshape(20.0, 20.0, 2.0));
+            store.reset(Point::new(2.0, 2.0));
+            for k in 1..=4u16 {
+                let id = store
+                    .insert(Point::new(2.0 + 3.0 * f32::from(k), 2.0), NodeId(0), false)
+                    .unwrap();
+                store.tree.mark(id, Mark::Root);
+                store.root_queue.push_back(id).unwrap();
+            }
+            store.tree.mark(NodeId(0), Mark::Root);
+            let slice = Slice {
+                deadline: Deadline::NEVER,
+                visits: 1,
+            };
+            store.rewire_root(&env, slice, true, &meter);
+            store.tree.validate().unwrap();
+            store.root_queue.front().map(|n| n.0)
+        };
+        assert_eq!(front_after_one_step(false), Some(2), "x_r2 peeked");
+        assert_eq!(front_after_one_step(true), Some(3), "x_r2 dequeued");
+    }
+
+    /// One step of Algorithm 6 from the stack `[p, q, x_r1]` (bottom to top) on a straight
+    /// tree `root (1) - q (7) - x_r1 (9) - p (13) - goal (18)` along `y = 10`, every node
+    /// already seen (no frontier): what is left on the stack.
+    fn goal_stack_after_one_step(printed: AsPrinted) -> heapless::Vec<u16, 8> {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        let (map, mut cfg) = open_map(&mut bits);
+        cfg.as_printed = printed;
+        let env = Env {
+            map: &map,
+            metric: &Euclidean,
+            cfg: &cfg,
+            call: Deadline::NEVER,
+        };
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        let mut store = TreeStore::<64, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        let goal = zigzag(
+            &mut store,
+            &[1.0, 7.0, 9.0, 13.0, 18.0].map(|x| Point::new(x, 10.0)),
+        );
+        for k in 0..5 {
+            store.tree.mark(NodeId(k), Mark::Goal);
+        }
+        let (q, x1, p) = (NodeId(1), NodeId(2), NodeId(3));
+        for id in [p, q, x1] {
+            store.goal_stack.push(id).unwrap();
+        }
+        let target = Target {
+            pos: Point::new(18.0, 10.0),
+            node: Some(goal),
+        };
+        let slice = Slice {
+            deadline: Deadline::NEVER,
+            visits: 1,
+        };
+        store.rewire_goal(&env, &target, slice, true, &meter);
+        store.tree.validate().unwrap();
+        store.goal_stack.iter().map(|n| n.0).collect()
+    }
+
+    #[test]
+    fn algorithm_6_as_printed_takes_x_r2_and_tests_the_second_node_with_slack() {
+        let run = |take: bool, clear: bool| {
+            let mut printed = AsPrinted::NONE;
+            printed.alg6_takes_x_r2 = take;
+            printed.alg6_clear = clear;
+            goal_stack_after_one_step(printed)
+        };
+        // Peeked x_r2 = q stays on top; q (11 m from the goal) is farther than x_r1 (9 m):
+        // this crate's test clears the stack.
+        assert_eq!(run(false, false)[..], []);
+        // Taken, q is gone; the top p (5 m) is nearer than x_r1: kept.
+        assert_eq!(run(true, false)[..], [3]);
+        // The printed test looks at Second(S) = p: 5 > 9 + d(x_r1, q) = 11 fails: kept.
+        assert_eq!(run(false, true)[..], [3, 1]);
+        // Both: one node left, len(S) > 1 fails: kept.
+        assert_eq!(run(true, true)[..], [3]);
+    }
+
+    #[test]
+    fn algorithm_6_as_printed_compares_the_way_through_x_r1() {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        let (map, cfg) = open_map(&mut bits);
+        let env = Env {
+            map: &map,
+            metric: &Euclidean,
+            cfg: &cfg,
+            call: Deadline::NEVER,
+        };
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        for (via, rewired) in [(None, true), (Some(Point::new(2.0, 6.0)), false)] {
+            let mut store = TreeStore::<64, 16>::new();
+            assert!(store.index.reshape(20.0, 20.0, 2.0));
+            // x_near (6, 2) reached round a detour: cost about 7.2.
+            let near = zigzag(
+                &mut store,
+                &[(2.0, 2.0), (4.0, 5.0), (6.0, 2.0)].map(|(x, y)| Point::new(x, y)),
+            );
+            let before = store.cost(near).length;
+            // The root as x_r2: its edge costs 4 < 7.2; through x_r1 (2, 6) 4 + 5.7 > 7.2.
+            let done = store.try_rewire_via(&env, NodeId(0), near, via, false, &meter);
+            assert_eq!(done, rewired, "via {via:?}, cost before {before}");
+            store.tree.validate().unwrap();
+        }
     }
 
     #[test]

@@ -193,11 +193,19 @@ fn run_with<M: Metric>(
         cfg.root_step = cfg.e_max * (0.05 + b.unit());
     }
     // A third byte: Nearest's view over the steering step only, reused tests, no rewiring
-    // while searching.
+    // while searching, the paper's Meet over every pair, and Algorithms 4 and 6 as printed,
+    // switch by switch.
     let third = b.u8();
     cfg.nearest_step = third & 1 != 0;
     cfg.reuse_tests = third & 2 != 0;
     cfg.rewire_while_searching = third & 4 == 0;
+    cfg.meet_all_pairs = third & 8 != 0;
+    cfg.as_printed = bi_am_rrt::AsPrinted {
+        alg4_takes_x_r2: third & 16 != 0,
+        alg6_takes_x_r2: third & 32 != 0,
+        alg6_cost: third & 64 != 0,
+        alg6_clear: third & 128 != 0,
+    };
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
