@@ -42,7 +42,7 @@ pub struct Variant {
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
 /// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`, `e_max`,
 /// `n_max`, `n_max_informed`, `clock_every`, `clock_every_max`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`, `rewire_new`, `connect`, `path_shortcuts`, `p_beacon`,
-/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `density_trades`, `steer_fan`, `nearest_step`, `reuse_tests`, `rewire_while_searching`, `meet_all_pairs`, `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
+/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `density_trades`, `steer_fan`, `nearest_step`, `reuse_tests`, `rewire_while_searching`, `meet_all_pairs`, `as_printed` (`all` or parts joined by `+`), `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
 /// one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
     spec.split(',')
@@ -104,6 +104,7 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "density_trades" => cfg.density_trades = v.parse()?,
         "steer_fan" => cfg.steer_fan = v.parse()?,
         "meet_all_pairs" => cfg.meet_all_pairs = v.parse()?,
+        "as_printed" => cfg.as_printed = crate::experiment::parse_as_printed(v)?,
         _ => return Err(anyhow!("unknown field {field:?}")),
     }
     Ok(())

@@ -28,7 +28,7 @@ pub use crate::results::Goals;
 use crate::results::{
     Manifest, MapTimes, Row, RowSink, RunKey, ScenarioId, Settings, Shard, Summary,
 };
-use crate::sim::{Prepared, drive, with_planner};
+use crate::sim::{DiscTrack, Prepared, drive, with_planner};
 
 /// What to do with a results folder that already holds an experiment.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,6 +63,12 @@ pub struct ExperimentArgs {
     pub wait_from_set: bool,
     /// Work per call (`--pace`).
     pub pace: crate::results::Pace,
+    /// Parts of Algorithms 4 and 6 as printed (`--as-printed`).
+    pub as_printed: bi_am_rrt::AsPrinted,
+    /// The paper's Meet over every pair (`--meet-all-pairs`).
+    pub meet_all_pairs: bool,
+    /// Fig. 7: radius of a disc dropped on goal 1's path (`--obstacle`).
+    pub obstacle: Option<f32>,
     /// Keep the reverse tree's branches at the meet (`Config::keep_reverse_branches`).
     pub keep_reverse_branches: bool,
     /// Stop runs once the goal is in the tree.
@@ -109,6 +115,40 @@ pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
         .collect()
 }
 
+/// `none`, `all`, or switch names of [`bi_am_rrt::AsPrinted::NAMES`] joined by `,` or `+`.
+pub fn parse_as_printed(spec: &str) -> Result<bi_am_rrt::AsPrinted> {
+    let spec = spec.trim();
+    if spec.eq_ignore_ascii_case("all") {
+        return Ok(bi_am_rrt::AsPrinted::ALL);
+    }
+    let mut out = bi_am_rrt::AsPrinted::NONE;
+    if spec.eq_ignore_ascii_case("none") || spec.is_empty() {
+        return Ok(out);
+    }
+    for name in spec.split([',', '+']) {
+        if !out.set(name.trim(), true) {
+            bail!(
+                "unknown part {name:?} of Algorithms 4 and 6; the parts are {} (or all, none)",
+                bi_am_rrt::AsPrinted::NAMES.join(", ")
+            );
+        }
+    }
+    Ok(out)
+}
+
+/// The names of the switches that are on, in [`bi_am_rrt::AsPrinted::NAMES`]'s order.
+pub fn as_printed_names(p: bi_am_rrt::AsPrinted) -> Vec<String> {
+    bi_am_rrt::AsPrinted::NAMES
+        .iter()
+        .filter(|n| {
+            let mut q = p;
+            q.set(n, false);
+            q != p
+        })
+        .map(|n| n.to_string())
+        .collect()
+}
+
 /// The planners as the runs use them (the switches applied).
 fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
     args.planners
@@ -124,6 +164,8 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
             if args.keep_reverse_branches {
                 c.keep_reverse_branches = true;
             }
+            c.as_printed = args.as_printed;
+            c.meet_all_pairs |= args.meet_all_pairs;
             if args.pace == crate::results::Pace::Paper {
                 c.max_expansions_per_call = PAPER_EXPANSIONS_PER_CALL;
                 c.rewire_mode = RewireMode::PerExpansion {
@@ -159,6 +201,9 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
         faithful: args.faithful,
         wait_from_set: args.wait_from_set,
         pace: args.pace,
+        as_printed: as_printed_names(args.as_printed),
+        meet_all_pairs: args.meet_all_pairs,
+        obstacle_m: args.obstacle,
         keep_reverse_branches: args.keep_reverse_branches,
         search_only: args.search_only,
         anytime_ms: args.anytime_ms,
@@ -182,29 +227,39 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         wait_from_set: args.wait_from_set,
         ..Protocol::default()
     };
+    // Fig. 7: a disc dropped on goal 1's path (the first goal driven).
+    let mut disc = args.obstacle.map(DiscTrack::new);
+    let first = goals[0];
+    let leg_start = crate::optimum::leg_starts(&prep.scenario)[first];
+    let mut track = |p: &mut crate::sim::SimPlanner<'_, '_>, gi: usize, agent, now_s: f64| {
+        if let Some(d) = disc.as_mut().filter(|_| gi == first) {
+            d.on_call(p, agent, leg_start, now_s);
+        }
+    };
     let (runs, final_nodes) = with_planner(prep, cfg, seed, |p| {
         let runs = match args.clock {
-            ClockKind::Wall => drive(
-                p,
-                prep,
-                &WallClock::new(),
-                &goals,
-                &protocol,
-                |_, _, _, _| {},
-            )?,
+            ClockKind::Wall => {
+                let clock = WallClock::new();
+                let hz = clock.ticks_per_second() as f64;
+                drive(p, prep, &clock, &goals, &protocol, |p, gi, a, _| {
+                    track(p, gi, a, clock.now() as f64 / hz)
+                })?
+            }
             ClockKind::Virtual => {
                 let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
+                let hz = clock.ticks_per_second() as f64;
                 // At the paper's pace every call lasts its full t_exp, as in the paper's
                 // Python: the clock moves on to where the call's budget ends.
                 let paper = args.pace == crate::results::Pace::Paper;
                 let t_exp = clock.ticks(cfg.t_exp);
                 let call_end = std::cell::Cell::new(clock.peek());
-                drive(p, prep, &clock, &goals, &protocol, |_, _, _, _| {
+                drive(p, prep, &clock, &goals, &protocol, |p, gi, a, _| {
                     if paper {
                         let end = call_end.get().saturating_add(t_exp).max(clock.peek());
                         clock.set(end);
                         call_end.set(end);
                     }
+                    track(p, gi, a, clock.peek() as f64 / hz);
                 })?
             }
         };
@@ -232,6 +287,9 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         .map(|g| {
             let any = if g.goal_index == 0 { anytime } else { None };
             let mut r = row(prep, cfg, seed, g, args.clock, final_nodes, any, run_wall_s);
+            if let Some(d) = disc.as_ref().filter(|_| g.goal_index == first) {
+                d.finish(&mut r, prep, prep.scenario.goals[first]);
+            }
             // At the paper's pace the call in which the goal joined lasted its full t_exp
             // (the clock moves on after the reading): its end is a whole number of calls.
             if args.pace == crate::results::Pace::Paper {
@@ -279,6 +337,14 @@ pub fn row(
         final_nodes,
         clock,
         run_wall_s,
+        disc_x_m: None,
+        disc_y_m: None,
+        disc_r_m: None,
+        cost_before_drop_m: None,
+        replan_s: None,
+        replanned_cost_m: None,
+        travelled_after_drop_m: None,
+        optimal_after_drop_m: None,
     }
 }
 

@@ -156,6 +156,22 @@ enum Command {
         /// proportional to the map's size off that range; README "Lengths that follow the map").
         #[arg(long)]
         paper_lengths: bool,
+        /// Parts of Algorithms 4 and 6 run exactly as printed instead of this crate's reading
+        /// (src/rewire.rs): `all`, `none`, or a comma-separated list of alg4-take (Algorithm
+        /// 4 dequeues x_r2), alg6-take (Algorithm 6 pops x_r2), alg6-cost (Algorithm 6's
+        /// cost test through x_r1), alg6-clear (Algorithm 6's clearing test on Second(S)).
+        #[arg(long, default_value = "none")]
+        as_printed: String,
+        /// The paper's Meet: every pair within sigma is tested for a free segment, not only
+        /// the 16 cheapest.
+        #[arg(long)]
+        meet_all_pairs: bool,
+        /// The paper's Fig. 7: drop a disc of this radius (metres) on goal 1's planned path
+        /// once the agent has moved 2 m, 10 m ahead along the path (as `run --obstacle`);
+        /// rows record the replanning time, the replanned path's cost and the detour
+        /// against the exact optimum around the disc.
+        #[arg(long)]
+        obstacle: Option<f32>,
     },
     /// Turn an experiment's results folder into charts (SVG and PNG) and a Markdown report in
     /// the shape of the paper's Section 5: Fig. 6 (original vs modified for each scheme), box
@@ -183,6 +199,23 @@ enum Command {
         /// Folders to join.
         #[arg(required = true)]
         inputs: Vec<PathBuf>,
+    },
+    /// Compare results folders that differ by one switch each against a base folder (the
+    /// same matrix): per planner and map, the change of each mean with its Mann-Whitney p,
+    /// as a Markdown page.
+    Compare {
+        /// The base folder.
+        #[arg(long)]
+        base: PathBuf,
+        /// Variants as LABEL=FOLDER.
+        #[arg(required = true)]
+        variants: Vec<String>,
+        /// Markdown file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Hand-written Markdown to include after the variants' table.
+        #[arg(long)]
+        notes: Option<PathBuf>,
     },
     /// Benchmark the planners on every leg of each scenario, like OMPL's benchmark: a fresh
     /// planner per leg and seed, thread CPU time, time to the first solution and path cost
@@ -511,6 +544,9 @@ fn main() -> Result<()> {
             wait_from_set,
             pace,
             paper_lengths,
+            as_printed,
+            meet_all_pairs,
+            obstacle,
         } => {
             let mut scs = maps::load_scenarios(&scenarios, names.as_deref())?;
             for s in &mut scs {
@@ -519,6 +555,9 @@ fn main() -> Result<()> {
             experiment::run(&ExperimentArgs {
                 wait_from_set,
                 pace,
+                as_printed: experiment::parse_as_printed(&as_printed)?,
+                meet_all_pairs,
+                obstacle,
                 shard,
                 existing: if resume {
                     experiment::Existing::Resume
@@ -572,6 +611,34 @@ fn main() -> Result<()> {
                 r.charts.len(),
                 out.with_extension("").display()
             );
+            Ok(())
+        }
+        Command::Compare {
+            base,
+            variants,
+            out,
+            notes,
+        } => {
+            let vs = variants
+                .iter()
+                .map(|v| {
+                    let (l, d) = v
+                        .split_once('=')
+                        .with_context(|| format!("variant {v:?}: expected LABEL=FOLDER"))?;
+                    Ok((l.to_string(), PathBuf::from(d)))
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let notes_text = notes
+                .as_ref()
+                .map(std::fs::read_to_string)
+                .transpose()
+                .context("reading --notes")?;
+            let command = std::iter::once("host-sim".to_string())
+                .chain(std::env::args().skip(1))
+                .collect::<Vec<_>>()
+                .join(" ");
+            host_sim::report::compare(&base, &vs, &out, &command, notes_text.as_deref())?;
+            println!("wrote {}", out.display());
             Ok(())
         }
         Command::Merge { out, inputs } => {

@@ -396,6 +396,8 @@ struct Cell {
     path_m: Vec<f64>,
     ratio: Vec<f64>,
     nodes: Vec<f64>,
+    /// Nodes at the end of the call in which the goal joined (the reference's count).
+    nodes_end: Vec<f64>,
 }
 
 impl Cell {
@@ -415,6 +417,10 @@ impl Cell {
             nodes: rows
                 .iter()
                 .filter_map(|r| r.nodes_at_goal.map(|n| n as f64))
+                .collect(),
+            nodes_end: rows
+                .iter()
+                .filter_map(|r| r.nodes_at_call_end.map(|n| n as f64))
                 .collect(),
         }
     }
@@ -541,9 +547,8 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         settings.table
     );
 
-    if let Some(n) = notes {
-        let _ = writeln!(md, "{}\n", n.trim_end());
-    }
+    // The notes go here once every figure they may quote is known (`fill`).
+    let notes_at = md.len();
 
     // Fig. 6: one chart per scheme.
     let mut scheme_changes: Vec<(Scheme, String, Option<f64>, Option<f64>)> = Vec::new();
@@ -761,6 +766,91 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         let _ = writeln!(md, "\n![box plots of {m}]({rel}/box-{m}.svg)\n");
     }
 
+    // Fig. 7: a disc dropped on the path.
+    if goal1.iter().any(|r| r.disc_r_m.is_some()) {
+        fig7(
+            &mut md,
+            &mut charts,
+            &goal1,
+            &planners,
+            &maps,
+            settings,
+            &chart_dir,
+            &rel,
+        )?;
+    }
+
+    if let Some(n) = notes {
+        let resolve = |args: &[&str]| -> Result<String> {
+            let [stat, measure, rest @ ..] = args else {
+                anyhow::bail!("expected STAT|MEASURE|...");
+            };
+            if *stat == "scheme" {
+                let [label, map] = rest else {
+                    anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
+                };
+                let sch = match *label {
+                    "-1" => Scheme::Bidirectional,
+                    "-2" => Scheme::Rewiring,
+                    "bi" => Scheme::Both,
+                    _ => anyhow::bail!("scheme {label:?}: -1, -2 or bi"),
+                };
+                let (_, _, ds, dp) = scheme_changes
+                    .iter()
+                    .find(|(s, m, _, _)| *s == sch && m == map)
+                    .with_context(|| format!("no scheme {label} on {map:?} in this folder"))?;
+                return Ok(pct(match *measure {
+                    "search" => *ds,
+                    "path" => *dp,
+                    _ => anyhow::bail!("scheme changes are of search or path"),
+                }));
+            }
+            let [planner, map] = rest else {
+                anyhow::bail!("expected {stat}|{measure}|PLANNER|MAP");
+            };
+            anyhow::ensure!(
+                planners.iter().any(|p| p == planner) && maps.iter().any(|m| m == map),
+                "no planner {planner:?} on map {map:?} in this folder"
+            );
+            let c = cell(planner, map);
+            let (sample, scale): (&[f64], f64) = match *measure {
+                "search" => (&c.search_s, 1e3),
+                "path" => (&c.path_m, 1.0),
+                "ratio" => (&c.ratio, 1.0),
+                "nodes" => (&c.nodes, 1.0),
+                "nodes_end" => (&c.nodes_end, 1.0),
+                _ => anyhow::bail!("measure {measure:?}: search, path, ratio, nodes or nodes_end"),
+            };
+            let fmt = |v: Option<f64>| match (*measure, v) {
+                (_, None) => "-".to_string(),
+                ("ratio", Some(v)) => format!("{v:.3}"),
+                ("nodes" | "nodes_end", Some(v)) => format!("{v:.0}"),
+                (_, Some(v)) => num(v * scale),
+            };
+            match *stat {
+                "mean" => Ok(fmt(mean(sample))),
+                "median" => Ok(fmt(Spread::of(sample.to_vec()).median)),
+                "change" => {
+                    let (_, orig) = scheme(planner)
+                        .filter(|(s, _)| *s != Scheme::Original)
+                        .with_context(|| format!("{planner} is an original planner"))?;
+                    let o = cell(&orig, map);
+                    let os: &[f64] = match *measure {
+                        "search" => &o.search_s,
+                        "path" => &o.path_m,
+                        "ratio" => &o.ratio,
+                        "nodes_end" => &o.nodes_end,
+                        _ => &o.nodes,
+                    };
+                    Ok(pct_p(change(mean(os), mean(sample)), os, sample))
+                }
+                _ => anyhow::bail!("statistic {stat:?}: mean, median, change or scheme"),
+            }
+        };
+        let filled = fill(n, resolve).context("the notes quote the data")?;
+        md.insert_str(notes_at, &format!("{}\n\n", filled.trim_end()));
+    }
+
     // Table 3.
     let _ = writeln!(md, "## Table 3: map processing\n");
     let _ = writeln!(
@@ -799,4 +889,341 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         markdown: out.to_path_buf(),
         charts,
     })
+}
+
+/// Writes `out` (Markdown): each folder of `variants` (label, folder) against the folder
+/// `base`, run with the same matrix and settings but for one switch each. Per planner and
+/// map, over goal 1: the base's mean, and each variant's change of the mean with the
+/// Mann-Whitney p of the two samples (bold below 0.05), for travelled path length, search
+/// time and nodes at goal. Settings that differ from the base's are listed per variant.
+pub fn compare(
+    base: &Path,
+    variants: &[(String, PathBuf)],
+    out: &Path,
+    command: &str,
+    notes: Option<&str>,
+) -> Result<()> {
+    let load = |dir: &Path| -> Result<(Manifest, Vec<Row>)> {
+        let m = Manifest::read(dir)?
+            .with_context(|| format!("{} has no experiment.json", dir.display()))?;
+        let rows = read_rows(dir, false)?
+            .into_iter()
+            .filter(|r| r.goal_index == 1)
+            .collect();
+        Ok((m, rows))
+    };
+    let (bm, brows) = load(base)?;
+    let mut vs = Vec::new();
+    for (label, dir) in variants {
+        let (m, rows) = load(dir)?;
+        if m.settings.planners != bm.settings.planners
+            || m.settings.scenarios != bm.settings.scenarios
+            || m.settings.repeats != bm.settings.repeats
+            || m.settings.seed != bm.settings.seed
+        {
+            anyhow::bail!(
+                "{} is not the same matrix as {} (planners, scenarios and seeds must match)",
+                dir.display(),
+                base.display()
+            );
+        }
+        vs.push((label.clone(), m, rows));
+    }
+    let cell = |rows: &[Row], p: &str, m: &str| {
+        let rs: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.planner == p && r.scenario == m)
+            .collect();
+        Cell::of(&rs)
+    };
+    let diffs = |m: &Manifest| -> String {
+        let (Ok(a), Ok(b)) = (
+            serde_json::to_value(&m.settings),
+            serde_json::to_value(&bm.settings),
+        ) else {
+            return String::new();
+        };
+        let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
+            return String::new();
+        };
+        let d: Vec<String> = a
+            .iter()
+            .filter(|(k, v)| b.get(*k) != Some(v))
+            .map(|(k, v)| format!("`{k}` {v}"))
+            .collect();
+        if d.is_empty() {
+            "none (the same settings)".into()
+        } else {
+            d.join(", ")
+        }
+    };
+    let done = |rows: &[Row]| crate::results::done_runs(rows).len();
+    let mut md = String::new();
+    let _ = writeln!(md, "# Results: one switch at a time\n");
+    let _ = writeln!(
+        md,
+        "Generated by `{command}` ({}). Base: `{}` ({} runs of goal 1, {} repeats from seed {}, \
+         clock `{:?}`, pace `{:?}`).\n",
+        bm.tool,
+        base.display(),
+        done(&brows),
+        bm.settings.repeats,
+        bm.settings.seed,
+        bm.settings.clock,
+        bm.settings.pace,
+    );
+    let _ = writeln!(
+        md,
+        "| variant | folder | runs | settings changed |\n|---|---|---:|---|"
+    );
+    for ((label, m, rows), (_, dir)) in vs.iter().zip(variants) {
+        let _ = writeln!(
+            md,
+            "| {label} | `{}` | {} | {} |",
+            dir.display(),
+            done(rows),
+            diffs(m)
+        );
+    }
+    let _ = writeln!(md);
+    let maps: Vec<&str> = bm
+        .settings
+        .scenarios
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
+    type Pick = fn(&Cell) -> &Vec<f64>;
+    let measures: [(&str, &str, f64, Pick); 3] = [
+        ("Travelled path length", "m", 1.0, |c| &c.path_m),
+        ("Search time", "ms", 1e3, |c| &c.search_s),
+        ("Nodes at goal", "nodes", 1.0, |c| &c.nodes),
+    ];
+    if let Some(n) = notes {
+        // {{change|MEASURE|VARIANT|PLANNER|MAP}}, {{minp|MEASURE|VARIANT}} (the smallest p
+        // over every planner and map, with that change), {{range|MEASURE|VARIANT}} (the
+        // changes' span); MEASURE: path, search or nodes.
+        let resolve = |args: &[&str]| -> Result<String> {
+            let [stat, measure, variant, rest @ ..] = args else {
+                anyhow::bail!("expected STAT|MEASURE|VARIANT|...");
+            };
+            let pick: Pick = match *measure {
+                "path" => |c| &c.path_m,
+                "search" => |c| &c.search_s,
+                "nodes" => |c| &c.nodes,
+                _ => anyhow::bail!("measure {measure:?}: path, search or nodes"),
+            };
+            let (_, _, vrows) = vs
+                .iter()
+                .find(|(l, _, _)| l == variant)
+                .with_context(|| format!("no variant {variant:?}"))?;
+            let one = |p: &str, m: &str| {
+                let (b, v) = (cell(&brows, p, m), cell(vrows, p, m));
+                let (bs, s) = (pick(&b).clone(), pick(&v).clone());
+                (
+                    change(mean(&bs), mean(&s)),
+                    crate::stats::mann_whitney_p(&bs, &s),
+                    bs,
+                    s,
+                )
+            };
+            let all = || {
+                bm.settings
+                    .planners
+                    .iter()
+                    .flat_map(|p| maps.iter().map(move |m| (p.clone(), *m)))
+                    .map(|(p, m)| one(&p, m))
+                    .collect::<Vec<_>>()
+            };
+            match (*stat, rest) {
+                ("change", [planner, map]) => {
+                    anyhow::ensure!(
+                        bm.settings.planners.iter().any(|p| p == planner) && maps.contains(map),
+                        "no planner {planner:?} on map {map:?}"
+                    );
+                    let (c, _, bs, s) = one(planner, map);
+                    Ok(pct_p(c, &bs, &s))
+                }
+                ("minp", []) => all()
+                    .into_iter()
+                    .filter_map(|(c, p, _, _)| Some((p?, c?)))
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .map(|(p, c)| format!("p {p:.2} ({c:+.1} %)"))
+                    .context("no samples"),
+                ("range", []) => {
+                    let cs: Vec<f64> = all().into_iter().filter_map(|(c, ..)| c).collect();
+                    let lo = cs.iter().copied().reduce(f64::min).context("no samples")?;
+                    let hi = cs.iter().copied().reduce(f64::max).context("no samples")?;
+                    Ok(format!("{lo:+.1} % to {hi:+.1} %"))
+                }
+                _ => anyhow::bail!("expected change|M|V|PLANNER|MAP, minp|M|V or range|M|V"),
+            }
+        };
+        let filled = fill(n, resolve).context("the notes quote the data")?;
+        let _ = writeln!(md, "{}\n", filled.trim_end());
+    }
+    for (title, unit, scale, pick) in measures {
+        let _ = writeln!(
+            md,
+            "## {title}\n\nBase mean ({unit}) and each variant's change of the mean, with the \
+             Mann-Whitney p of the two samples; **bold**: p < 0.05.\n"
+        );
+        let _ = write!(md, "| planner | map | base |");
+        for (label, _, _) in &vs {
+            let _ = write!(md, " {label} |");
+        }
+        let _ = write!(md, "\n|---|---|---:|");
+        for _ in &vs {
+            let _ = write!(md, "---:|");
+        }
+        let _ = writeln!(md);
+        for p in &bm.settings.planners {
+            for m in &maps {
+                let b = cell(&brows, p, m);
+                let bs = pick(&b);
+                let _ = write!(md, "| {p} | {m} | {} |", opt(mean(bs), scale));
+                for (_, _, rows) in &vs {
+                    let v = cell(rows, p, m);
+                    let s = pick(&v);
+                    let c = change(mean(bs), mean(s));
+                    let p = crate::stats::mann_whitney_p(bs, s);
+                    let text = pct_p(c, bs, s);
+                    if p.is_some_and(|p| p < 0.05) {
+                        let _ = write!(md, " **{text}** |");
+                    } else {
+                        let _ = write!(md, " {text} |");
+                    }
+                }
+                let _ = writeln!(md);
+            }
+        }
+        let _ = writeln!(md);
+    }
+    if let Some(dir) = out.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(out, md).with_context(|| format!("{}", out.display()))?;
+    Ok(())
+}
+
+/// The Fig. 7 section (runs of `experiment --obstacle`): per map and planner, how the disc
+/// dropped on goal 1's path was handled, and a box plot of the detours.
+#[allow(clippy::too_many_arguments)]
+fn fig7(
+    md: &mut String,
+    charts: &mut Vec<PathBuf>,
+    goal1: &[&Row],
+    planners: &[String],
+    maps: &[String],
+    settings: &crate::results::Settings,
+    chart_dir: &Path,
+    rel: &str,
+) -> Result<()> {
+    let t_exp_s = settings.t_exp_ms.unwrap_or(150.0) / 1e3;
+    let radius = settings.obstacle_m.unwrap_or(f32::NAN);
+    let _ = writeln!(md, "## Fig. 7: a disc dropped on the path\n");
+    let _ = writeln!(
+        md,
+        "Once the agent has moved 2 m, a disc of radius {radius} m is dropped on goal 1's \
+         planned path at the first path point more than 10 m ahead (and more than the radius \
+         + 3 m from the goal). *Calls to a free path*: plan calls from the drop until the \
+         planner's path to the goal is free of the disc again (the simulation looks between \
+         calls, so one call is the least it can see). *Replanned / before*: that path's cost \
+         against the path's cost just before the drop. *Detour*: what the agent travelled \
+         from the drop to the goal against the exact optimum from there around the disc \
+         (the disc rasterised to cells of at most 0.25 m wholly inside it, so the optimum \
+         is at most the true one and the detour at least the true one).\n"
+    );
+    for m in maps {
+        let _ = writeln!(
+            md,
+            "### {m}\n\n| planner | dropped | reached | collisions | calls to a free path, \
+             median [max] | never free | replanned / before, mean | detour, median [IQR] | \
+             detour, mean |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+        );
+        let mut samples = Vec::new();
+        for p in planners {
+            let rs: Vec<&&Row> = goal1
+                .iter()
+                .filter(|r| &r.planner == p && &r.scenario == m)
+                .collect();
+            let dropped: Vec<&&&Row> = rs.iter().filter(|r| r.disc_r_m.is_some()).collect();
+            let calls: Vec<f64> = dropped
+                .iter()
+                .filter_map(|r| r.replan_s.map(|s| (s / t_exp_s).round()))
+                .collect();
+            let never = dropped.iter().filter(|r| r.replan_s.is_none()).count();
+            let cost: Vec<f64> = dropped
+                .iter()
+                .filter_map(|r| Some(f64::from(r.replanned_cost_m? / r.cost_before_drop_m?)))
+                .collect();
+            let detour: Vec<f64> = dropped
+                .iter()
+                .filter_map(|r| {
+                    Some(f64::from(r.travelled_after_drop_m?) / f64::from(r.optimal_after_drop_m?))
+                })
+                .collect();
+            let c = Spread::of(calls.clone());
+            let d = Spread::of(detour.clone());
+            let f3 = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
+            let _ = writeln!(
+                md,
+                "| {p} | {}/{} | {} | {} | {} [{}] | {never} | {} | {} [{}, {}] | {} |",
+                dropped.len(),
+                rs.len(),
+                dropped.iter().filter(|r| r.reached).count(),
+                dropped.iter().map(|r| r.collisions).sum::<u32>(),
+                opt(c.median, 1.0),
+                opt(calls.iter().copied().reduce(f64::max), 1.0),
+                f3(mean(&cost)),
+                f3(d.median),
+                f3(d.q1),
+                f3(d.q3),
+                f3(mean(&detour)),
+            );
+            samples.push(detour);
+        }
+        let file = chart_dir.join(format!("fig7-{m}"));
+        let boxes = Boxes {
+            title: format!("Fig. 7, {m}: a disc of {radius} m dropped on the path"),
+            panels: vec![BoxPanel {
+                title: "travelled from the drop / exact optimum around the disc".into(),
+                x_label: "ratio".into(),
+                log: false,
+                names: planners.to_vec(),
+                samples,
+            }],
+        };
+        if boxes.panels[0].samples.iter().any(|s| !s.is_empty()) {
+            render(&boxes, &file)?;
+            charts.push(file);
+            let _ = writeln!(md, "\n![Fig. 7 detours on {m}]({rel}/fig7-{m}.svg)\n");
+        } else {
+            let _ = writeln!(md);
+        }
+    }
+    Ok(())
+}
+
+/// Replaces every `{{A|B|...}}` in `text` with `resolve(&[A, B, ...])`: notes written by
+/// hand quote the data through these, so a regenerated page never states a figure its data
+/// no longer gives, and a quote the data cannot answer (a planner or map the folder does not
+/// hold) is an error naming it.
+pub fn fill(text: &str, resolve: impl Fn(&[&str]) -> Result<String>) -> Result<String> {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(i) = rest.find("{{") {
+        out.push_str(&rest[..i]);
+        let after = &rest[i + 2..];
+        let j = after
+            .find("}}")
+            .with_context(|| format!("unclosed {{{{ at {:?}", &rest[i..rest.len().min(i + 40)]))?;
+        let key = &after[..j];
+        let args: Vec<&str> = key.split('|').map(str::trim).collect();
+        out.push_str(&resolve(&args).with_context(|| format!("{{{{{key}}}}}"))?);
+        rest = &after[j + 2..];
+    }
+    out.push_str(rest);
+    Ok(out)
 }

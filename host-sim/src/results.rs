@@ -124,6 +124,17 @@ pub struct Settings {
     /// Work per call (absent in folders made before issue 24: full).
     #[serde(default)]
     pub pace: Pace,
+    /// The parts of Algorithms 4 and 6 run as printed (`bi_am_rrt::AsPrinted` switch names;
+    /// absent before issue 24: none).
+    #[serde(default)]
+    pub as_printed: Vec<String>,
+    /// The paper's Meet over every pair within sigma (`Config::meet_all_pairs`; absent
+    /// before issue 24: the 16 cheapest pairs).
+    #[serde(default)]
+    pub meet_all_pairs: bool,
+    /// Fig. 7: radius of the disc dropped on goal 1's path (absent before issue 24: none).
+    #[serde(default)]
+    pub obstacle_m: Option<f32>,
 }
 
 impl Settings {
@@ -312,6 +323,32 @@ pub struct Row {
     pub clock: ClockKind,
     /// Wall seconds of the whole run (all its goals; not repeatable).
     pub run_wall_s: f64,
+    /// Fig. 7 (`experiment --obstacle`; absent before issue 24; empty when no disc was
+    /// dropped on this goal's path, [`crate::sim::drop_on_path`]): the disc's centre and
+    /// radius.
+    #[serde(default)]
+    pub disc_x_m: Option<f32>,
+    #[serde(default)]
+    pub disc_y_m: Option<f32>,
+    #[serde(default)]
+    pub disc_r_m: Option<f32>,
+    /// The path's cost to the goal just before the drop.
+    #[serde(default)]
+    pub cost_before_drop_m: Option<f32>,
+    /// From the drop to the end of the first call whose path to the goal is free of it
+    /// (`None`: no such call before the run ended).
+    #[serde(default)]
+    pub replan_s: Option<f64>,
+    /// That first free path's cost.
+    #[serde(default)]
+    pub replanned_cost_m: Option<f32>,
+    /// What the agent travelled from where it stood at the drop to the goal.
+    #[serde(default)]
+    pub travelled_after_drop_m: Option<f32>,
+    /// The exact optimum from there with the disc in place (rasterised to cells of at most
+    /// 0.25 m lying wholly inside it, so at most the true optimum).
+    #[serde(default)]
+    pub optimal_after_drop_m: Option<f32>,
 }
 
 impl Row {

@@ -8,8 +8,9 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use bi_am_rrt::Point;
 use bi_am_rrt::agent::Protocol;
-use bi_am_rrt::{Circle, Point};
+use bi_am_rrt::clock::Clock as _;
 use std::time::Instant;
 
 use crate::experiment::row;
@@ -125,8 +126,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
     };
     let mut trail = vec![prep.scenario.start];
     let mut found_drawn = false;
-    let mut dropped = false;
+    let mut disc = args.obstacle.map(crate::sim::DiscTrack::new);
     let mut avoided_drawn = false;
+    let wall_clock = WallClock::new();
+    let virtual_clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
+    let now_s = || match args.clock {
+        ClockKind::Wall => wall_clock.now() as f64 / wall_clock.ticks_per_second() as f64,
+        ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
+    };
+    let leg_starts = crate::optimum::leg_starts(&prep.scenario);
     let mut pictures: Vec<String> = Vec::new();
     let out = args.out.clone();
     let painter = Painter::new(prep.scenario.map.grid(), 800);
@@ -172,6 +180,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 );
                 save("found.png", &s);
             }
+            let dropped = disc.as_ref().is_some_and(|d| d.disc.is_some());
             if dropped && !avoided_drawn {
                 let mut path = vec![Point::ZERO; p.tree().len().max(1)];
                 if p.path(&mut path).is_ok_and(|i| i.to_goal && !i.blocked) {
@@ -182,37 +191,23 @@ pub fn run(args: &RunArgs) -> Result<()> {
                     );
                 }
             }
-            if let (Some(r), false) = (args.obstacle, dropped)
-                && agent.dist(prep.scenario.start) > 2.0
+            if let Some(d) = disc.as_mut().filter(|_| gi == goals[0])
+                && let Some(c) = d.on_call(p, agent, leg_starts[gi], now_s())
             {
-                // A disc on the path about 10 m ahead of the agent.
-                let mut path = vec![Point::ZERO; p.tree().len()];
-                if let Ok(bi_am_rrt::PathInfo { len: n, .. }) = p.path(&mut path) {
-                    let mut ahead = 0.0;
-                    for w in path[..n].windows(2) {
-                        ahead += w[0].dist(w[1]);
-                        if ahead > 10.0 && p.goal().is_some_and(|g| w[1].dist(g) > r + 3.0) {
-                            dropped = p.add_obstacle(Circle::new(w[1], r)).is_ok();
-                            if dropped {
-                                println!(
-                                    "dropped a disc of radius {r} m at ({:.1}, {:.1}) on the path",
-                                    w[1].x, w[1].y
-                                );
-                                save(
-                                    "obstacle.png",
-                                    &scene(
-                                        p,
-                                        &trail,
-                                        &prep.scenario,
-                                        gi,
-                                        title("a disc drops on the path"),
-                                    ),
-                                );
-                            }
-                            break;
-                        }
-                    }
-                }
+                println!(
+                    "dropped a disc of radius {} m at ({:.1}, {:.1}) on the path",
+                    c.radius, c.center.x, c.center.y
+                );
+                save(
+                    "obstacle.png",
+                    &scene(
+                        p,
+                        &trail,
+                        &prep.scenario,
+                        gi,
+                        title("a disc drops on the path"),
+                    ),
+                );
             }
             if let (Some(every), Some(a)) = (args.animate, animation.as_mut())
                 && call.is_multiple_of(every.max(1))
@@ -231,22 +226,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
             }
         };
         let runs: Vec<GoalRun> = match args.clock {
-            ClockKind::Wall => drive(
-                p,
-                &prep,
-                &WallClock::new(),
-                &goals,
-                &Protocol::default(),
-                hook,
-            )?,
-            ClockKind::Virtual => drive(
-                p,
-                &prep,
-                &virtual_clock(VIRTUAL_NS_PER_UNIT),
-                &goals,
-                &Protocol::default(),
-                hook,
-            )?,
+            ClockKind::Wall => drive(p, &prep, &wall_clock, &goals, &Protocol::default(), hook)?,
+            ClockKind::Virtual => {
+                drive(p, &prep, &virtual_clock, &goals, &Protocol::default(), hook)?
+            }
         };
         let last = runs.last().map_or(0, |g| g.goal_index);
         let s = scene(p, &trail, &prep.scenario, last, title("the end"));
@@ -266,7 +249,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         println!("  animation: {} frames in {}", a.frames, gif.display());
     }
     drop(animation);
-    if args.obstacle.is_some() && !dropped {
+    if disc.as_ref().is_some_and(|d| d.disc.is_none()) {
         println!(
             "no disc was dropped: the path never ran 10 m ahead of the agent with the goal further \
              than the radius + 3 m"
@@ -288,6 +271,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
             )
         })
         .collect();
+    let mut rows = rows;
+    if let (Some(d), Some(r)) = (disc.as_ref(), rows.first_mut()) {
+        d.finish(r, &prep, prep.scenario.goals[goals[0]]);
+    }
     println!(
         "{} on {} ({}), seed {}, {:?} clock",
         args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock
@@ -323,6 +310,22 @@ pub fn run(args: &RunArgs) -> Result<()> {
             g.collisions,
             g.nodes_at_goal.map_or("-".into(), |n| n.to_string()),
             g.calls
+        );
+    }
+    if let Some(r) = rows.first()
+        && let (Some(x), Some(y), Some(rad)) = (r.disc_x_m, r.disc_y_m, r.disc_r_m)
+    {
+        let m = |v: Option<f32>| v.map_or("-".into(), |v| format!("{v:.2} m"));
+        println!(
+            "  disc of {rad} m at {}: path cost before {}, free path again after {} (cost {}), \
+             travelled from the drop {} against an exact optimum around the disc of {}",
+            prep.scenario.show(bi_am_rrt::Point::new(x, y)),
+            m(r.cost_before_drop_m),
+            r.replan_s
+                .map_or("- (never)".into(), |s| format!("{:.1} ms", s * 1e3)),
+            m(r.replanned_cost_m),
+            m(r.travelled_after_drop_m),
+            m(r.optimal_after_drop_m),
         );
     }
     if let Some(s) = prep.bake_seconds.get() {

@@ -9,7 +9,7 @@ use anyhow::{Result, anyhow};
 use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use bi_am_rrt::clock::Clock;
 use bi_am_rrt::metric::DiffusionTable;
-use bi_am_rrt::{Config, Map, MetricKind, Planner, Storage};
+use bi_am_rrt::{Circle, Config, Map, MetricKind, Planner, Point, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
@@ -230,4 +230,147 @@ pub fn drive<'s, 't, C: Clock + ?Sized>(
         }
     }
     Ok(out)
+}
+
+/// The paper's Fig. 7 rule for dropping a dynamic obstacle (`run --obstacle`, `experiment
+/// --obstacle`): once the agent stands more than 2 m from where the goal was set, a disc of
+/// radius `r` is dropped on the planned path at the first path point more than 10 m ahead
+/// (along the path) that is farther than `r + 3` m from the goal and whose disc would not
+/// cover the agent. Returns the disc if one was dropped.
+pub fn drop_on_path(
+    p: &mut SimPlanner<'_, '_>,
+    agent: Point,
+    leg_start: Point,
+    r: f32,
+) -> Option<Circle> {
+    if agent.dist(leg_start) <= 2.0 {
+        return None;
+    }
+    let goal = p.goal()?;
+    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
+    let n = p.path(&mut path).ok()?.len;
+    let mut ahead = 0.0;
+    for w in path[..n].windows(2) {
+        ahead += w[0].dist(w[1]);
+        if ahead > 10.0 && w[1].dist(goal) > r + 3.0 && w[1].dist(agent) > r + 0.5 {
+            let c = Circle::new(w[1], r);
+            return p.add_obstacle(c).is_ok().then_some(c);
+        }
+    }
+    None
+}
+
+/// Fig. 7's measurements of one goal (`DiscTrack::on_call` after every plan call, then
+/// [`DiscTrack::finish`]), filled into a row's `disc_*`, `replan_s`, ... fields.
+#[derive(Clone, Debug, Default)]
+pub struct DiscTrack {
+    /// Radius of the disc to drop.
+    pub radius: f32,
+    /// The disc dropped, when.
+    pub disc: Option<Circle>,
+    dropped_at_s: f64,
+    agent_at_drop: Point,
+    travelled_at_drop: f64,
+    /// The path's cost just before the drop.
+    pub cost_before: Option<f32>,
+    /// Seconds from the drop to the first free path to the goal.
+    pub replan_s: Option<f64>,
+    /// That path's cost.
+    pub replanned_cost: Option<f32>,
+    travelled: f64,
+    last: Option<Point>,
+}
+
+impl DiscTrack {
+    /// A track that drops a disc of radius `radius`.
+    pub fn new(radius: f32) -> Self {
+        Self {
+            radius,
+            ..Self::default()
+        }
+    }
+
+    /// After a plan call at `now_s` on the run's clock, the agent at `agent`, on the leg that
+    /// began at `leg_start`. Returns the disc when this call dropped it.
+    pub fn on_call(
+        &mut self,
+        p: &mut SimPlanner<'_, '_>,
+        agent: Point,
+        leg_start: Point,
+        now_s: f64,
+    ) -> Option<Circle> {
+        if let Some(last) = self.last {
+            self.travelled += f64::from(last.dist(agent));
+        }
+        self.last = Some(agent);
+        let goal_cost = |p: &SimPlanner<'_, '_>| {
+            p.goal_node()
+                .and_then(|g| p.tree().cost(g))
+                .filter(|c| !c.blocked)
+                .map(|c| c.length)
+        };
+        if self.disc.is_none() {
+            let before = goal_cost(p);
+            let c = drop_on_path(p, agent, leg_start, self.radius)?;
+            self.disc = Some(c);
+            self.cost_before = before;
+            self.dropped_at_s = now_s;
+            self.agent_at_drop = agent;
+            self.travelled_at_drop = self.travelled;
+            return Some(c);
+        }
+        if self.replan_s.is_none()
+            && let Some(cost) = goal_cost(p)
+        {
+            self.replan_s = Some(now_s - self.dropped_at_s);
+            self.replanned_cost = Some(cost);
+        }
+        None
+    }
+
+    /// Fills the row's Fig. 7 fields (nothing when no disc was dropped); `optimum` gives the
+    /// exact optimum from the agent's position at the drop to the goal with the disc.
+    pub fn finish(&self, row: &mut crate::results::Row, prep: &Prepared, goal: Point) {
+        let Some(c) = self.disc else {
+            return;
+        };
+        row.disc_x_m = Some(c.center.x);
+        row.disc_y_m = Some(c.center.y);
+        row.disc_r_m = Some(c.radius);
+        row.cost_before_drop_m = self.cost_before;
+        row.replan_s = self.replan_s;
+        row.replanned_cost_m = self.replanned_cost;
+        if row.reached {
+            row.travelled_after_drop_m = Some((self.travelled - self.travelled_at_drop) as f32);
+        }
+        row.optimal_after_drop_m =
+            optimum_with_disc(&prep.scenario, c, self.agent_at_drop, goal).map(|o| o as f32);
+    }
+}
+
+/// The exact optimum from `a` to `b` on the scenario's map with the disc `c` added, the disc
+/// rasterised to cells of at most 0.25 m (the map's cells split evenly) lying wholly inside
+/// it: at most the true optimum around the disc.
+pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<f64> {
+    let grid = s.map.grid();
+    let cell = grid.cell_size();
+    let split = (cell / 0.25).ceil().max(1.0) as u32;
+    let fine = cell / split as f32;
+    let cols = u32::from(grid.cols()) * split;
+    let rows = u32::from(grid.rows()) * split;
+    let (cols16, rows16) = (u16::try_from(cols).ok()?, u16::try_from(rows).ok()?);
+    let r2 = c.radius * c.radius;
+    let inside = |x: f32, y: f32| {
+        let (dx, dy) = (x - c.center.x, y - c.center.y);
+        dx * dx + dy * dy <= r2
+    };
+    let refined = crate::maps::OwnedGrid::from_fn(cols16, rows16, fine, |col, row| {
+        let (col, row) = (u32::from(col), u32::from(row));
+        let coarse = grid.is_occupied((col / split) as u16, (row / split) as u16);
+        let (x0, y0) = (col as f32 * fine, row as f32 * fine);
+        let (x1, y1) = (x0 + fine, y0 + fine);
+        coarse || (inside(x0, y0) && inside(x1, y0) && inside(x0, y1) && inside(x1, y1))
+    })
+    .ok()?;
+    crate::optimum::Corners::of(&refined.grid()).shortest(a, b)
 }

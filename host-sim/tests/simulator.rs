@@ -82,6 +82,9 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
         faithful: false,
         wait_from_set: false,
         pace: host_sim::results::Pace::Paper,
+        as_printed: bi_am_rrt::AsPrinted::NONE,
+        meet_all_pairs: false,
+        obstacle: None,
         keep_reverse_branches: false,
         search_only: true,
         anytime_ms: 0,
@@ -138,6 +141,9 @@ fn the_experiment_writes_one_row_per_run() {
         faithful: false,
         wait_from_set: false,
         pace: host_sim::results::Pace::Full,
+        as_printed: bi_am_rrt::AsPrinted::NONE,
+        meet_all_pairs: false,
+        obstacle: None,
         keep_reverse_branches: true,
         search_only: false,
         anytime_ms: 5,
@@ -231,6 +237,9 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
         faithful: false,
         wait_from_set: false,
         pace: host_sim::results::Pace::Full,
+        as_printed: bi_am_rrt::AsPrinted::NONE,
+        meet_all_pairs: false,
+        obstacle: None,
         keep_reverse_branches: false,
         search_only: true,
         anytime_ms: 0,
@@ -948,6 +957,69 @@ fn docs_results_is_the_report_of_its_data() {
             made == committed,
             "docs/{page}.md is stale: regenerate it with {command}"
         );
+    }
+    // One switch at a time (results-printed.md), made by `compare`.
+    let data = docs.join("results-printed-data");
+    let variants: Vec<(String, std::path::PathBuf)> = [
+        ("alg4-take", "alg4-take"),
+        ("alg6-take", "alg6-take"),
+        ("alg6-cost", "alg6-cost"),
+        ("alg6-clear", "alg6-clear"),
+        ("all", "all"),
+        ("meet-all-pairs", "meet"),
+    ]
+    .iter()
+    .map(|(l, d)| (l.to_string(), data.join(d)))
+    .collect();
+    let command = format!(
+        "host-sim compare --base docs/results-printed-data/none {} --out docs/results-printed.md \
+         --notes docs/results-printed-notes.md",
+        variants
+            .iter()
+            .map(|(l, d)| format!(
+                "{l}=docs/results-printed-data/{}",
+                d.file_name().unwrap().to_string_lossy()
+            ))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let notes = std::fs::read_to_string(docs.join("results-printed-notes.md")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("results-printed.md");
+    host_sim::report::compare(&data.join("none"), &variants, &out, &command, Some(&notes)).unwrap();
+    let made = std::fs::read_to_string(&out)
+        .unwrap()
+        .replace(&data.display().to_string(), "docs/results-printed-data");
+    let committed = std::fs::read_to_string(docs.join("results-printed.md")).unwrap();
+    assert!(
+        made == committed,
+        "docs/results-printed.md is stale: regenerate it with {command}"
+    );
+}
+
+/// Issue 24: notes quote the data through `{{...}}`; a quote the data cannot answer fails.
+#[test]
+fn notes_quote_the_data_and_a_quote_it_cannot_answer_fails() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let data = root.join("docs/results-pace-data");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r.md");
+    let good = "AM-RRT*(D)-2 on office: {{change|path|AM-RRT*(D)-2|office}}; \
+                -2 on maze {{scheme|path|-2|maze}}; nodes {{median|nodes_end|AM-RRT*(D)|bug_trap}}.";
+    host_sim::report::report(&data, &out, "cmd", Some(good)).unwrap();
+    let page = std::fs::read_to_string(&out).unwrap();
+    assert!(!page.contains("{{"), "every quote is filled");
+    assert!(page.contains("AM-RRT*(D)-2 on office: "));
+    for bad in [
+        "{{change|path|AM-RRT*(Q)-2|office}}",
+        "{{mean|path|AM-RRT*(D)|atlantis}}",
+        "{{change|path|AM-RRT*(D)|office}}",
+        "{{scheme|path|-3|office}}",
+        "{{median|speed|AM-RRT*(D)|office}}",
+        "unclosed {{mean|path",
+    ] {
+        let e = host_sim::report::report(&data, &out, "cmd", Some(bad));
+        assert!(e.is_err(), "{bad} should not resolve");
     }
 }
 
