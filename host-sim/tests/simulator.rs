@@ -575,6 +575,7 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
             out: dir.path().to_path_buf(),
             animate: None,
             t_exp: None,
+            pace: host_sim::results::Pace::Full,
         };
         let e = host_sim::run::run(&args).unwrap_err().to_string();
         assert!(
@@ -599,6 +600,7 @@ fn run_draws_every_moment() {
         out: dir.path().to_path_buf(),
         animate: Some(20),
         t_exp: Some(std::time::Duration::from_millis(10)),
+        pace: host_sim::results::Pace::Full,
     };
     host_sim::run::run(&args).unwrap();
     for f in [
@@ -731,6 +733,7 @@ fn half_metre_cells_work_end_to_end() {
         out: out.clone(),
         animate: None,
         t_exp: Some(std::time::Duration::from_millis(10)),
+        pace: host_sim::results::Pace::Full,
     })
     .unwrap();
     let result = std::fs::read_to_string(out.join("result.json")).unwrap();
@@ -995,6 +998,59 @@ fn docs_results_is_the_report_of_its_data() {
         made == committed,
         "docs/results-printed.md is stale: regenerate it with {command}"
     );
+}
+
+/// Issue 24, found by Fig. 7 at the paper's pace: a disc dropped on bug_trap's path left
+/// RT-RRT*-1 (seed 16) and RT-RRT*(D)-1 (seed 12) holding for 3,000 calls though the goal
+/// could still be reached around it (59-61 m): the goal was in the tree, so the starving rule
+/// (issue 23) did not apply while the density rule refused every state the way around
+/// needed. Every run that drops a disc must reach goal 1 without a collision.
+#[test]
+fn regression_a_disc_that_blocks_a_joined_path_does_not_starve_the_tree() {
+    let Some(file) = shared_maps() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    for (planner, seed) in [("RT-RRT*-1", 16), ("RT-RRT*(D)-1", 12)] {
+        let args = ExperimentArgs {
+            scenarios: maps::load_scenarios(&file, Some(&["bug_trap".to_string()])).unwrap(),
+            planners: experiment::parse_planners(planner).unwrap(),
+            repeats: 1,
+            clock: ClockKind::Virtual,
+            goals: Goals::First,
+            seed,
+            jobs: Some(1),
+            faithful: false,
+            wait_from_set: false,
+            pace: host_sim::results::Pace::Paper,
+            as_printed: bi_am_rrt::AsPrinted::NONE,
+            meet_all_pairs: false,
+            obstacle: Some(3.0),
+            keep_reverse_branches: false,
+            search_only: false,
+            anytime_ms: 0,
+            table: TableOptions::default(),
+            t_exp: None,
+            shard: None,
+            existing: Existing::Overwrite,
+            out: out.clone(),
+        };
+        experiment::run(&args).unwrap();
+        let mut rdr = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+        let rows: Vec<host_sim::results::Row> = rdr.deserialize().map(|r| r.unwrap()).collect();
+        let r = &rows[0];
+        assert!(
+            r.disc_r_m.is_some(),
+            "{planner} seed {seed}: no disc dropped"
+        );
+        assert!(r.optimal_after_drop_m.is_some(), "the goal stays reachable");
+        assert!(
+            r.reached && r.collisions == 0 && r.replan_s.is_some(),
+            "{planner} seed {seed}: reached {} after {} calls, free path again after {:?} s",
+            r.reached,
+            r.calls,
+            r.replan_s
+        );
+    }
 }
 
 /// Issue 24: notes quote the data through `{{...}}`; a quote the data cannot answer fails.
