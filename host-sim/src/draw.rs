@@ -25,8 +25,10 @@ pub const REVERSE: RGBColor = RGBColor(120, 200, 120);
 pub const PATH: RGBColor = RGBColor(215, 30, 30);
 /// The agent's trail.
 pub const TRAIL: RGBColor = RGBColor(240, 140, 0);
-/// Dynamic obstacles.
-pub const OBSTACLE: RGBColor = RGBColor(20, 20, 20);
+/// Dynamic obstacles (their own colour: not the walls').
+pub const OBSTACLE: RGBColor = RGBColor(0, 150, 160);
+/// The agent (a ring).
+pub const AGENT: RGBColor = RGBColor(230, 110, 0);
 /// The joining segment of a meet.
 pub const MEET: RGBColor = RGBColor(200, 0, 200);
 /// Start and goals.
@@ -147,15 +149,20 @@ impl<'g> Painter<'g> {
     pub fn size(&self) -> (u32, u32) {
         (
             self.map_px.0 + LEGEND_PX,
-            (self.map_px.1 + TITLE_PX).max(TITLE_PX + 330),
+            // Room for the legend and the obstacle inset below it.
+            (self.map_px.1 + TITLE_PX).max(TITLE_PX + 500),
         )
     }
 
-    fn px(&self, p: Point) -> (i32, i32) {
-        (
-            (f64::from(p.x) * self.scale).round() as i32,
-            (f64::from(p.y) * self.scale).round() as i32,
-        )
+    /// The whole map as a view.
+    fn full_view(&self) -> View {
+        View {
+            x0: 0.0,
+            y0: 0.0,
+            x1: f64::from(self.grid.width_m()),
+            y1: f64::from(self.grid.height_m()),
+            scale: self.scale,
+        }
     }
 
     /// Draws `scene` on `root` (of [`Painter::size`]).
@@ -174,92 +181,8 @@ impl<'g> Painter<'g> {
         )))?;
         let (map, legend) = rest.split_horizontally(self.map_px.0);
         let map = map.shrink((0, 0), self.map_px);
-        let line = |c: RGBColor, w: u32| ShapeStyle::from(c).stroke_width(w);
-        // Map.
-        for [a, b] in &self.walls {
-            let p = |(x, y): (f64, f64)| ((x * self.scale) as i32, (y * self.scale) as i32);
-            ok(map.draw(&Rectangle::new([p(*a), p(*b)], WALL.filled())))?;
-        }
-        ok(map.draw(&Rectangle::new(
-            [(0, 0), (self.map_px.0 as i32 - 1, self.map_px.1 as i32 - 1)],
-            line(BLACK, 1),
-        )))?;
-        // Trees, path, trail.
-        for (edges, colour) in [(&scene.forward, FORWARD), (&scene.reverse, REVERSE)] {
-            for [a, b] in edges.iter() {
-                ok(map.draw(&PathElement::new(
-                    vec![self.px(*a), self.px(*b)],
-                    line(colour, 1),
-                )))?;
-            }
-        }
-        if scene.trail.len() > 1 {
-            let pts: Vec<_> = scene.trail.iter().map(|p| self.px(*p)).collect();
-            ok(map.draw(&PathElement::new(pts, line(TRAIL, 3))))?;
-        }
-        if scene.path.len() > 1 {
-            let pts: Vec<_> = scene.path.iter().map(|p| self.px(*p)).collect();
-            ok(map.draw(&PathElement::new(pts, line(PATH, 2))))?;
-        }
-        // Dynamic obstacles over the path (a path crossing one shows through).
-        for c in &scene.circles {
-            let r = (f64::from(c.radius) * self.scale).round().max(2.0) as i32;
-            ok(map.draw(&plotters::element::Circle::new(
-                self.px(c.center),
-                r,
-                OBSTACLE.mix(0.75).filled(),
-            )))?;
-            ok(map.draw(&plotters::element::Circle::new(
-                self.px(c.center),
-                r + 2,
-                line(PATH, 1),
-            )))?;
-        }
-        if let Some([a, b]) = scene.meet {
-            ok(map.draw(&PathElement::new(
-                vec![self.px(a), self.px(b)],
-                line(MEET, 4),
-            )))?;
-            for p in [a, b] {
-                ok(map.draw(&plotters::element::Circle::new(
-                    self.px(p),
-                    4,
-                    MEET.filled(),
-                )))?;
-            }
-        }
-        // Start, goals (numbered from 1; the active one ringed), agent.
-        let start_style = TextStyle::from(("sans-serif", 13).into_font()).color(&START);
-        let goal_style = TextStyle::from(("sans-serif", 13).into_font()).color(&GOAL);
-        let label = |s: String, at: (i32, i32), style: &TextStyle<'static>| {
-            Text::new(s, (at.0 + 7, at.1 - 7), style.clone())
-        };
-        ok(map.draw(&plotters::element::Circle::new(
-            self.px(scene.start),
-            5,
-            START.filled(),
-        )))?;
-        ok(map.draw(&label("S".into(), self.px(scene.start), &start_style)))?;
-        for (i, g) in scene.goals.iter().enumerate() {
-            let at = self.px(*g);
-            ok(map.draw(&plotters::element::Circle::new(at, 4, GOAL.filled())))?;
-            if scene.active == Some(i) {
-                ok(map.draw(&plotters::element::Circle::new(at, 9, line(PATH, 2))))?;
-            }
-            ok(map.draw(&label(format!("{}", i + 1), at, &goal_style)))?;
-        }
-        if let Some(a) = scene.agent {
-            ok(map.draw(&plotters::element::Circle::new(
-                self.px(a),
-                5,
-                TRAIL.filled(),
-            )))?;
-            ok(map.draw(&plotters::element::Circle::new(
-                self.px(a),
-                5,
-                line(BLACK, 1),
-            )))?;
-        }
+        let full = self.full_view();
+        self.draw_view(scene, &map, &full, true)?;
         // Scale bar, bottom left, on a white box.
         let wm = f64::from(self.grid.width_m());
         let len = nice_length(wm);
@@ -279,19 +202,48 @@ impl<'g> Painter<'g> {
             TextStyle::from(("sans-serif", 13).into_font())
                 .pos(Pos::new(HPos::Center, VPos::Bottom)),
         )))?;
-        // Legend.
-        let entries: [(&str, Swatch); 10] = [
-            ("forward tree", Swatch::Line(FORWARD, 2)),
-            ("reverse tree", Swatch::Line(REVERSE, 2)),
-            ("planned path", Swatch::Line(PATH, 2)),
-            ("agent's trail", Swatch::Line(TRAIL, 3)),
-            ("meet (joining segment)", Swatch::Line(MEET, 4)),
-            ("dynamic obstacle", Swatch::Disc(OBSTACLE, 6)),
-            ("start S", Swatch::Disc(START, 5)),
-            ("agent", Swatch::Disc(TRAIL, 5)),
-            ("goals 1..n, active ringed", Swatch::Disc(GOAL, 4)),
-            ("wall", Swatch::Square(WALL)),
-        ];
+        // Legend: only what this picture shows.
+        let mut entries: Vec<(&str, Swatch)> = Vec::new();
+        let mut add = |shown: bool, name: &'static str, sw: Swatch| {
+            if shown {
+                entries.push((name, sw));
+            }
+        };
+        add(
+            !scene.forward.is_empty(),
+            "forward tree",
+            Swatch::Line(FORWARD, 2),
+        );
+        add(
+            !scene.reverse.is_empty(),
+            "reverse tree",
+            Swatch::Line(REVERSE, 2),
+        );
+        add(scene.path.len() > 1, "planned path", Swatch::Line(PATH, 2));
+        add(
+            scene.trail.len() > 1,
+            "agent's trail",
+            Swatch::Line(TRAIL, 3),
+        );
+        add(
+            scene.meet.is_some(),
+            "meet (joining segment)",
+            Swatch::Line(MEET, 4),
+        );
+        add(
+            !scene.circles.is_empty(),
+            "dynamic obstacle",
+            Swatch::Disc(OBSTACLE, 6),
+        );
+        add(true, "start S", Swatch::Disc(START, 5));
+        add(scene.agent.is_some(), "agent", Swatch::Ring(AGENT, 6));
+        add(
+            !scene.goals.is_empty(),
+            "goals 1..n, active ringed",
+            Swatch::Disc(GOAL, 4),
+        );
+        add(!self.walls.is_empty(), "wall", Swatch::Square(WALL));
+        let line = |c: RGBColor, w: u32| ShapeStyle::from(c).stroke_width(w);
         for (k, (name, sw)) in entries.iter().enumerate() {
             let y = 14 + 24 * k as i32;
             match *sw {
@@ -300,6 +252,9 @@ impl<'g> Painter<'g> {
                 }
                 Swatch::Disc(c, r) => {
                     ok(legend.draw(&plotters::element::Circle::new((22, y), r, c.filled())))?
+                }
+                Swatch::Ring(c, r) => {
+                    ok(legend.draw(&plotters::element::Circle::new((22, y), r, line(c, 3))))?
                 }
                 Swatch::Square(c) => {
                     ok(legend.draw(&Rectangle::new([(14, y - 7), (30, y + 7)], c.filled())))?
@@ -313,6 +268,7 @@ impl<'g> Painter<'g> {
             )))?;
         }
         let cell = self.grid.cell_size();
+        let below = 14 + 24 * entries.len() as i32;
         ok(legend.draw(&Text::new(
             format!(
                 "{} x {} cells of {} m",
@@ -320,9 +276,146 @@ impl<'g> Painter<'g> {
                 self.grid.rows(),
                 cell
             ),
-            (10, 14 + 24 * entries.len() as i32),
+            (10, below),
             TextStyle::from(("sans-serif", 11).into_font()).pos(Pos::new(HPos::Left, VPos::Center)),
         )))?;
+        // The first dynamic obstacle, zoomed: where the detour is.
+        if let Some(c) = scene.circles.first() {
+            let side = i32::try_from(LEGEND_PX).unwrap_or(190) - 14;
+            let top = below + 22;
+            let (_, lh) = legend.dim_in_pixel();
+            if top + side + 18 <= lh as i32 {
+                let half = (f64::from(c.radius) * 2.5).max(4.0);
+                let (cx, cy) = (f64::from(c.center.x), f64::from(c.center.y));
+                let view = View {
+                    x0: cx - half,
+                    y0: cy - half,
+                    x1: cx + half,
+                    y1: cy + half,
+                    scale: f64::from(side) / (2.0 * half),
+                };
+                ok(legend.draw(&Text::new(
+                    format!("around the obstacle (x{:.0})", view.scale / self.scale),
+                    (8, top - 8),
+                    TextStyle::from(("sans-serif", 11).into_font())
+                        .pos(Pos::new(HPos::Left, VPos::Center)),
+                )))?;
+                let inset = legend.shrink((7, top), (side as u32, side as u32));
+                ok(inset.fill(&WHITE))?;
+                self.draw_view(scene, &inset, &view, false)?;
+                ok(inset.draw(&Rectangle::new(
+                    [(0, 0), (side - 1, side - 1)],
+                    line(BLACK, 1),
+                )))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Draws the map layer of `scene` seen through `view` on `area` (whose pixel (0, 0) is
+    /// the view's corner); everything outside the view is clipped. `labels`: S and goal
+    /// numbers.
+    fn draw_view<DB: DrawingBackend>(
+        &self,
+        scene: &Scene,
+        area: &DrawingArea<DB, Shift>,
+        view: &View,
+        labels: bool,
+    ) -> Result<()> {
+        let line = |c: RGBColor, w: u32| ShapeStyle::from(c).stroke_width(w);
+        let seg = |a: Point, b: Point, style: ShapeStyle| -> Result<()> {
+            if let Some((p, q)) = view.clip(a, b) {
+                ok(area.draw(&PathElement::new(vec![p, q], style)))?;
+            }
+            Ok(())
+        };
+        // Map.
+        for [a, b] in &self.walls {
+            let (x0, y0) = (a.0.max(view.x0), a.1.max(view.y0));
+            let (x1, y1) = (b.0.min(view.x1), b.1.min(view.y1));
+            if x0 < x1 && y0 < y1 {
+                ok(area.draw(&Rectangle::new(
+                    [view.px_f(x0, y0), view.px_f(x1, y1)],
+                    WALL.filled(),
+                )))?;
+            }
+        }
+        let (w, h) = view.px_f(view.x1, view.y1);
+        ok(area.draw(&Rectangle::new([(0, 0), (w - 1, h - 1)], line(BLACK, 1))))?;
+        // Trees, path, trail.
+        for (edges, colour) in [(&scene.forward, FORWARD), (&scene.reverse, REVERSE)] {
+            for [a, b] in edges.iter() {
+                seg(*a, *b, line(colour, 1))?;
+            }
+        }
+        for w in scene.trail.windows(2) {
+            seg(w[0], w[1], line(TRAIL, 3))?;
+        }
+        for w in scene.path.windows(2) {
+            seg(w[0], w[1], line(PATH, 2))?;
+        }
+        // Dynamic obstacles over the path (a path crossing one shows through), in their own
+        // colour with a dark edge.
+        for c in &scene.circles {
+            if !view.holds(c.center, f64::from(c.radius)) {
+                continue;
+            }
+            let r = (f64::from(c.radius) * view.scale).round().max(2.0) as i32;
+            let at = view.px(c.center);
+            ok(area.draw(&plotters::element::Circle::new(
+                at,
+                r,
+                OBSTACLE.mix(0.8).filled(),
+            )))?;
+            ok(area.draw(&plotters::element::Circle::new(at, r, line(BLACK, 1))))?;
+        }
+        if let Some([a, b]) = scene.meet {
+            seg(a, b, line(MEET, 4))?;
+            for p in [a, b] {
+                if view.holds(p, 0.0) {
+                    ok(area.draw(&plotters::element::Circle::new(
+                        view.px(p),
+                        4,
+                        MEET.filled(),
+                    )))?;
+                }
+            }
+        }
+        // The agent first, as a ring: S and the goals stay visible under it.
+        if let Some(a) = scene.agent
+            && view.holds(a, 0.0)
+        {
+            ok(area.draw(&plotters::element::Circle::new(
+                view.px(a),
+                7,
+                line(AGENT, 3),
+            )))?;
+        }
+        let start_style = TextStyle::from(("sans-serif", 13).into_font()).color(&START);
+        let goal_style = TextStyle::from(("sans-serif", 13).into_font()).color(&GOAL);
+        let label = |s: String, at: (i32, i32), style: &TextStyle<'static>| {
+            Text::new(s, (at.0 + 7, at.1 - 7), style.clone())
+        };
+        if view.holds(scene.start, 0.0) {
+            let at = view.px(scene.start);
+            ok(area.draw(&plotters::element::Circle::new(at, 5, START.filled())))?;
+            if labels {
+                ok(area.draw(&label("S".into(), at, &start_style)))?;
+            }
+        }
+        for (i, g) in scene.goals.iter().enumerate() {
+            if !view.holds(*g, 0.0) {
+                continue;
+            }
+            let at = view.px(*g);
+            ok(area.draw(&plotters::element::Circle::new(at, 4, GOAL.filled())))?;
+            if scene.active == Some(i) {
+                ok(area.draw(&plotters::element::Circle::new(at, 9, line(PATH, 2))))?;
+            }
+            if labels {
+                ok(area.draw(&label(format!("{}", i + 1), at, &goal_style)))?;
+            }
+        }
         Ok(())
     }
 
@@ -354,7 +447,68 @@ impl<'g> Painter<'g> {
 enum Swatch {
     Line(RGBColor, u32),
     Disc(RGBColor, i32),
+    Ring(RGBColor, i32),
     Square(RGBColor),
+}
+
+/// A rectangle of the map (metres) drawn at `scale` pixels per metre from its corner.
+struct View {
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+    scale: f64,
+}
+
+impl View {
+    fn px_f(&self, x: f64, y: f64) -> (i32, i32) {
+        (
+            ((x - self.x0) * self.scale).round() as i32,
+            ((y - self.y0) * self.scale).round() as i32,
+        )
+    }
+
+    fn px(&self, p: Point) -> (i32, i32) {
+        self.px_f(f64::from(p.x), f64::from(p.y))
+    }
+
+    /// Whether the disc of `r` around `p` lies wholly in the view.
+    fn holds(&self, p: Point, r: f64) -> bool {
+        let (x, y) = (f64::from(p.x), f64::from(p.y));
+        x - r >= self.x0 && x + r <= self.x1 && y - r >= self.y0 && y + r <= self.y1
+    }
+
+    /// The part of segment `a`-`b` inside the view, in pixels (Liang-Barsky).
+    fn clip(&self, a: Point, b: Point) -> Option<((i32, i32), (i32, i32))> {
+        let (ax, ay) = (f64::from(a.x), f64::from(a.y));
+        let (dx, dy) = (f64::from(b.x) - ax, f64::from(b.y) - ay);
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        for (p, q) in [
+            (-dx, ax - self.x0),
+            (dx, self.x1 - ax),
+            (-dy, ay - self.y0),
+            (dy, self.y1 - ay),
+        ] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return None;
+                }
+            } else {
+                let t = q / p;
+                if p < 0.0 {
+                    t0 = t0.max(t);
+                } else {
+                    t1 = t1.min(t);
+                }
+            }
+        }
+        (t0 <= t1).then(|| {
+            (
+                self.px_f(ax + t0 * dx, ay + t0 * dy),
+                self.px_f(ax + t1 * dx, ay + t1 * dy),
+            )
+        })
+    }
 }
 
 /// An animated GIF of a run, one frame per scene added (frames rendered with plotters,

@@ -167,14 +167,21 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
             c.as_printed = args.as_printed;
             c.meet_all_pairs |= args.meet_all_pairs;
             if args.pace == crate::results::Pace::Paper {
-                c.max_expansions_per_call = PAPER_EXPANSIONS_PER_CALL;
-                c.rewire_mode = RewireMode::PerExpansion {
-                    visits: PAPER_VISITS,
-                };
+                paper_pace(&mut c);
             }
             c
         })
         .collect()
+}
+
+/// The paper's pace (`--pace paper`): [`PAPER_EXPANSIONS_PER_CALL`] expansions per call and
+/// [`PAPER_VISITS`] rewiring visits per phase and expansion (the caller makes every call last
+/// its full `t_exp` on a virtual clock).
+pub fn paper_pace(c: &mut Config) {
+    c.max_expansions_per_call = PAPER_EXPANSIONS_PER_CALL;
+    c.rewire_mode = RewireMode::PerExpansion {
+        visits: PAPER_VISITS,
+    };
 }
 
 /// Expansions per `plan` call at the paper's pace: Table 2's budgets spend `t_root + t_goal`

@@ -77,6 +77,9 @@ enum Command {
         /// proportional to the map's size off that range; README "Lengths that follow the map").
         #[arg(long)]
         paper_lengths: bool,
+        /// Work per call, as `experiment --pace` (`paper` needs --clock virtual).
+        #[arg(long, value_enum, default_value = "full")]
+        pace: host_sim::results::Pace,
         /// Also write an animated GIF of the run (run.gif), one frame every N plan calls.
         #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "2",
               value_parser = clap::value_parser!(u32).range(1..))]
@@ -502,6 +505,7 @@ fn main() -> Result<()> {
             animate,
             t_exp_ms,
             paper_lengths,
+            pace,
         } => {
             let mut sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
@@ -520,6 +524,7 @@ fn main() -> Result<()> {
                 out,
                 animate,
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
+                pace,
             })
         }
         Command::Experiment {

@@ -74,6 +74,34 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A log axis's label for `y` = log10(value): the value at whole decades (1, 10, 100, 0.1, in
+/// one format), nothing between them.
+fn decade(y: f64) -> String {
+    let k = y.round();
+    if (y - k).abs() > 1e-6 {
+        return String::new();
+    }
+    let v = 10f64.powi(k as i32);
+    if k >= 0.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.*}", (-k) as usize)
+    }
+}
+
+/// A linear axis's label, every label of an axis over `lo..hi` with the same decimals (as
+/// many as a tenth of the range needs).
+fn tick(v: f64, lo: f64, hi: f64) -> String {
+    let step = ((hi - lo) / 10.0).max(1e-12);
+    let decimals = (-step.log10()).ceil().max(0.0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// Tick count for a log axis over `lo..hi` (log10 units) that lands ticks on whole decades.
+fn log_ticks(lo: f64, hi: f64) -> usize {
+    ((hi - lo).ceil() as usize + 1).max(2)
+}
+
 /// Groups of bars, one panel per (row, column).
 struct Bars {
     title: String,
@@ -86,8 +114,10 @@ struct BarPanel {
     y_label: String,
     log: bool,
     groups: Vec<String>,
-    /// Colour of each series (named in the chart's title).
-    series: Vec<RGBColor>,
+    /// Colour and name of each series (the legend box).
+    series: Vec<(RGBColor, String)>,
+    /// A horizontal reference line and its legend entry (e.g. the exact optimum).
+    reference: Option<(f64, String)>,
     /// `values[group][series]`.
     values: Vec<Vec<Option<f64>>>,
     /// Text above each group (e.g. the change in percent).
@@ -124,11 +154,18 @@ impl BarPanel {
             return Ok(());
         };
         let min = all.iter().copied().reduce(f64::min).unwrap_or(max);
+        let (min, max) = match self.reference {
+            Some((r, _)) => (min.min(r), max.max(r)),
+            None => (min, max),
+        };
         let tf = |v: f64| if self.log { v.log10() } else { v };
+        // Log: whole decades, and room above for the legend. Linear (lengths): not from
+        // zero, so that a change of 1 % is a visible step; room above for the legend.
         let (lo, hi) = if self.log {
-            (tf(min).floor(), tf(max).ceil() + 0.35)
+            (tf(min).floor(), tf(max).ceil() + 0.6)
         } else {
-            (0.0, max * 1.2)
+            let lo = min * 0.97;
+            (lo, max + 0.45 * (max - lo))
         };
         let n = self.groups.len();
         let mut chart = ok(ChartBuilder::on(area)
@@ -153,12 +190,12 @@ impl BarPanel {
                 }
             })
             .x_label_style(("sans-serif", 10))
-            .y_labels(8)
-            .y_label_formatter(&|y| if log { num(10f64.powf(*y)) } else { num(*y) })
+            .y_labels(if log { log_ticks(lo, hi) } else { 8 })
+            .y_label_formatter(&|y| if log { decade(*y) } else { tick(*y, lo, hi) })
             .y_desc(self.y_label.as_str())
             .draw())?;
         let width = 0.8 / self.series.len().max(1) as f64;
-        for (s, colour) in self.series.iter().enumerate() {
+        for (s, (colour, name)) in self.series.iter().enumerate() {
             let colour = *colour;
             let bars = self.values.iter().enumerate().filter_map(|(g, v)| {
                 let v = v.get(s).copied().flatten()?;
@@ -168,8 +205,29 @@ impl BarPanel {
                     colour.filled(),
                 ))
             });
-            ok(chart.draw_series(bars))?;
+            ok(chart.draw_series(bars))?
+                .label(name.as_str())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 12, y + 5)], colour.filled())
+                });
         }
+        if let Some((r, name)) = &self.reference {
+            let y = tf(*r);
+            let style = ShapeStyle::from(RGBColor(200, 60, 40)).stroke_width(2);
+            ok(chart.draw_series(std::iter::once(PathElement::new(
+                vec![(-0.5, y), (n as f64 - 0.5, y)],
+                style,
+            ))))?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 12, y)], style));
+        }
+        ok(chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.5))
+            .label_font(("sans-serif", 11))
+            .draw())?;
         for (g, note) in self.notes.iter().enumerate() {
             let (Some(note), Some(top)) = (
                 note,
@@ -254,8 +312,13 @@ impl BoxPanel {
         ) else {
             return Ok(());
         };
-        let pad = ((max - min) * 0.05).max(if self.log { 0.1 } else { 0.005 });
-        let (lo, hi) = (min - pad, max + pad);
+        // Log: whole decades, so the ticks land on 1, 10, 100.
+        let (lo, hi) = if self.log {
+            (min.floor(), max.ceil().max(min.floor() + 1.0))
+        } else {
+            let pad = ((max - min) * 0.05).max(0.005);
+            (min - pad, max + pad)
+        };
         let n = self.names.len();
         // Planner `i` sits at y = n - 1 - i (the first on top).
         let mut chart = ok(ChartBuilder::on(area)
@@ -280,8 +343,8 @@ impl BoxPanel {
                 }
             })
             .y_label_style(("sans-serif", 11))
-            .x_labels(8)
-            .x_label_formatter(&|x| if log { num(10f64.powf(*x)) } else { num(*x) })
+            .x_labels(if log { log_ticks(lo, hi) } else { 8 })
+            .x_label_formatter(&|x| if log { decade(*x) } else { tick(*x, lo, hi) })
             .x_desc(self.x_label.as_str())
             .draw())?;
         let colour = RGBColor(40, 80, 160);
@@ -311,8 +374,18 @@ impl BoxPanel {
                 PathElement::new(vec![(wl, y - h / 2.0), (wl, y + h / 2.0)], style).into_dyn(),
                 PathElement::new(vec![(wh, y - h / 2.0), (wh, y + h / 2.0)], style).into_dyn(),
             ];
-            for x in v.iter().filter(|x| !inside(x)) {
-                shapes.push(Circle::new((*x, y), 2, style).into_dyn());
+            // Every sample as a dot, spread over the box's height in a fixed pattern so that
+            // equal values stay apart (outliers are the dots beyond the whiskers).
+            for (k, x) in d.iter().enumerate() {
+                let jitter = ((k * 37) % 11) as f64 / 10.0 - 0.5;
+                shapes.push(
+                    Circle::new(
+                        (*x, y + jitter * h * 1.4),
+                        2,
+                        RGBColor(200, 90, 30).mix(0.6).filled(),
+                    )
+                    .into_dyn(),
+                );
             }
             ok(chart.draw_series(shapes))?;
         }
@@ -398,6 +471,10 @@ struct Cell {
     nodes: Vec<f64>,
     /// Nodes at the end of the call in which the goal joined (the reference's count).
     nodes_end: Vec<f64>,
+    /// Fig. 7: seconds from the disc's drop to a free path again.
+    replan_s: Vec<f64>,
+    /// Fig. 7: travelled from the drop / the exact optimum around the disc.
+    detour: Vec<f64>,
 }
 
 impl Cell {
@@ -421,6 +498,13 @@ impl Cell {
             nodes_end: rows
                 .iter()
                 .filter_map(|r| r.nodes_at_call_end.map(|n| n as f64))
+                .collect(),
+            replan_s: rows.iter().filter_map(|r| r.replan_s).collect(),
+            detour: rows
+                .iter()
+                .filter_map(|r| {
+                    Some(f64::from(r.travelled_after_drop_m?) / f64::from(r.optimal_after_drop_m?))
+                })
                 .collect(),
         }
     }
@@ -508,7 +592,14 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
     let mut md = String::new();
     let done = crate::results::done_runs(&rows).len();
     let wanted = manifest.runs().len();
-    let _ = writeln!(md, "# Results: the paper's experiment, measured\n");
+    let _ = writeln!(
+        md,
+        "# Results: the paper's experiment, measured{}\n",
+        match settings.obstacle_m {
+            Some(r) => format!(" with a disc of {r} m dropped on the path (Fig. 7)"),
+            None => String::new(),
+        }
+    );
     let _ = writeln!(
         md,
         "Generated by `{command}` from `{}` ({done} of {wanted} runs{}; {}). Regenerate with the \
@@ -551,7 +642,9 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
     let notes_at = md.len();
 
     // Fig. 6: one chart per scheme.
-    let mut scheme_changes: Vec<(Scheme, String, Option<f64>, Option<f64>)> = Vec::new();
+    // (scheme, map, search change, path change, the originals of the complete pairs).
+    type SchemeChange = (Scheme, String, Option<f64>, Option<f64>, Vec<String>);
+    let mut scheme_changes: Vec<SchemeChange> = Vec::new();
     for sch in [Scheme::Bidirectional, Scheme::Rewiring, Scheme::Both] {
         let pairs: Vec<(String, String)> = planners
             .iter()
@@ -584,12 +677,23 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                     notes.push(change(vo, vp).map(|c| format!("{c:+.1}%")));
                     values.push(vec![vo, vp]);
                 }
+                let optimum = goal1
+                    .iter()
+                    .find(|r| &r.scenario == m)
+                    .and_then(|r| r.optimal_m)
+                    .map(f64::from);
                 panels.push(BarPanel {
                     title: format!("{m}: {what}"),
                     y_label: if log { "ms (log)".into() } else { "m".into() },
                     log,
                     groups: pairs.iter().map(|(o, _)| o.clone()).collect(),
-                    series: vec![RGBColor(150, 150, 150), RGBColor(40, 90, 180)],
+                    series: vec![
+                        (RGBColor(150, 150, 150), "original".into()),
+                        (RGBColor(40, 90, 180), "modified".into()),
+                    ],
+                    reference: optimum
+                        .filter(|_| !log)
+                        .map(|o| (o, format!("exact optimum {o:.2} m"))),
                     values,
                     notes,
                 });
@@ -603,7 +707,10 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         });
         render(
             &Bars {
-                title: format!("Fig. 6 {}: original (grey) vs modified (blue)", sch.label()),
+                title: format!(
+                    "Fig. 6 {}: each original against its modified planner",
+                    sch.label()
+                ),
                 cols: maps.len().max(1),
                 panels,
             },
@@ -611,14 +718,28 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         )?;
         charts.push(file);
         for m in &maps {
+            // Only complete pairs: both planners with a mean search time and path length.
             let mut ds = Vec::new();
             let mut dp = Vec::new();
+            let mut used = Vec::new();
             for (o, p) in &pairs {
                 let (co, cp) = (cell(o, m), cell(p, m));
-                ds.extend(change(co.search_mean(), cp.search_mean()));
-                dp.extend(change(co.path_mean(), cp.path_mean()));
+                let (s, l) = (
+                    change(co.search_mean(), cp.search_mean()),
+                    change(co.path_mean(), cp.path_mean()),
+                );
+                if let (Some(s), Some(l)) = (s, l) {
+                    ds.push(s);
+                    dp.push(l);
+                    used.push(o.clone());
+                } else if settings.search_only
+                    && let Some(s) = s
+                {
+                    ds.push(s);
+                    used.push(o.clone());
+                }
             }
-            scheme_changes.push((sch, m.clone(), mean(&ds), mean(&dp)));
+            scheme_changes.push((sch, m.clone(), mean(&ds), mean(&dp), used));
         }
     }
 
@@ -670,20 +791,26 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
     let _ = writeln!(
         md,
         "Change of the modified planner against its original (mean search time, mean path \
-         length), averaged over the base planners the folder holds, per map. The paper's figures are from \
-         its text (Section 5.2).\n"
+         length), averaged over the pairs named in the last column (the complete pairs: both \
+         planners in the folder with a mean), per map. The paper's figures are from its text \
+         (Section 5.2).\n"
     );
     let _ = writeln!(
         md,
-        "| scheme | map | search time | path length |\n|---|---|---:|---:|"
+        "| scheme | map | search time | path length | averaged over (originals) |\n|---|---|---:|---:|---|"
     );
-    for (sch, m, ds, dp) in &scheme_changes {
+    for (sch, m, ds, dp, used) in &scheme_changes {
         let _ = writeln!(
             md,
-            "| {} | {m} | {} | {} |",
+            "| {} | {m} | {} | {} | {} |",
             sch.label(),
             pct(*ds),
-            pct(*dp)
+            pct(*dp),
+            if used.is_empty() {
+                "none".to_string()
+            } else {
+                used.join(", ")
+            }
         );
     }
     let _ = writeln!(md, "\n| the paper says | |\n|---|---|");
@@ -706,7 +833,15 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
          change is within seed noise.\n"
     );
     for m in &maps {
-        let _ = writeln!(md, "### {m}\n");
+        let optimum = goal1
+            .iter()
+            .find(|r| &r.scenario == m)
+            .and_then(|r| r.optimal_m);
+        let _ = writeln!(
+            md,
+            "### {m}\n\nExact optimum from the start to goal 1: {}.\n",
+            optimum.map_or("- (unreachable)".into(), |o| format!("{o:.2} m"))
+        );
         let _ = writeln!(
             md,
             "| planner | {} | search ms, median [IQR] | search ms, mean | path m, mean | \
@@ -795,9 +930,9 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                     "bi" => Scheme::Both,
                     _ => anyhow::bail!("scheme {label:?}: -1, -2 or bi"),
                 };
-                let (_, _, ds, dp) = scheme_changes
+                let (_, _, ds, dp, _) = scheme_changes
                     .iter()
-                    .find(|(s, m, _, _)| *s == sch && m == map)
+                    .find(|(s, m, ..)| *s == sch && m == map)
                     .with_context(|| format!("no scheme {label} on {map:?} in this folder"))?;
                 return Ok(pct(match *measure {
                     "search" => *ds,
@@ -819,11 +954,15 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 "ratio" => (&c.ratio, 1.0),
                 "nodes" => (&c.nodes, 1.0),
                 "nodes_end" => (&c.nodes_end, 1.0),
-                _ => anyhow::bail!("measure {measure:?}: search, path, ratio, nodes or nodes_end"),
+                "replan" => (&c.replan_s, 1e3),
+                "detour" => (&c.detour, 1.0),
+                _ => anyhow::bail!(
+                    "measure {measure:?}: search, path, ratio, nodes, nodes_end, replan or detour"
+                ),
             };
             let fmt = |v: Option<f64>| match (*measure, v) {
                 (_, None) => "-".to_string(),
-                ("ratio", Some(v)) => format!("{v:.3}"),
+                ("ratio" | "detour", Some(v)) => format!("{v:.3}"),
                 ("nodes" | "nodes_end", Some(v)) => format!("{v:.0}"),
                 (_, Some(v)) => num(v * scale),
             };
@@ -840,6 +979,8 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                         "path" => &o.path_m,
                         "ratio" => &o.ratio,
                         "nodes_end" => &o.nodes_end,
+                        "replan" => &o.replan_s,
+                        "detour" => &o.detour,
                         _ => &o.nodes,
                     };
                     Ok(pct_p(change(mean(os), mean(sample)), os, sample))

@@ -320,9 +320,6 @@ pub struct Row {
     /// Cost after `anytime_ms` of planning towards goal 1 without moving.
     pub anytime_cost_m: Option<f32>,
     pub final_nodes: usize,
-    pub clock: ClockKind,
-    /// Wall seconds of the whole run (all its goals; not repeatable).
-    pub run_wall_s: f64,
     /// Fig. 7 (`experiment --obstacle`; absent before issue 24; empty when no disc was
     /// dropped on this goal's path, [`crate::sim::drop_on_path`]): the disc's centre and
     /// radius.
@@ -349,6 +346,9 @@ pub struct Row {
     /// 0.25 m lying wholly inside it, so at most the true optimum).
     #[serde(default)]
     pub optimal_after_drop_m: Option<f32>,
+    pub clock: ClockKind,
+    /// Wall seconds of the whole run (all its goals; not repeatable).
+    pub run_wall_s: f64,
 }
 
 impl Row {

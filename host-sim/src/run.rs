@@ -41,6 +41,8 @@ pub struct RunArgs {
     pub animate: Option<u32>,
     /// Planning time per call (`None`: the planner's, the paper's 150 ms).
     pub t_exp: Option<std::time::Duration>,
+    /// Work per call (`--pace`).
+    pub pace: crate::results::Pace,
 }
 
 /// A snapshot of the planner for a picture.
@@ -69,14 +71,16 @@ fn scene(
     }
 }
 
-/// The paper's Fig. 7b: the same planner and seed, replayed from the start towards goal 1 one
-/// expansion per call (on the virtual clock), drawn at the expansion where the trees meet:
-/// the forward tree, the reverse tree as it was just before (a meet clears it) and the joining
-/// segment. `None` for a planner without a reverse tree, or when the goal joins otherwise.
-fn meet_scene(prep: &Prepared, mut cfg: bi_am_rrt::Config, seed: u64) -> Result<Option<Scene>> {
-    if !cfg.bidirectional {
-        return Ok(None);
-    }
+/// The moment goal 1 joins the forward tree, replayed with the run's seed one expansion per
+/// call on the virtual clock (a `plan` call ends after the join, with the agent moving and
+/// the trees changed): `(found, meet)`, the scene at the join and, for a bidirectional
+/// planner that joined through a meet, the same moment with the reverse tree as it was just
+/// before the meet cleared it and the joining segment (the paper's Fig. 7b).
+fn join_scenes(
+    prep: &Prepared,
+    mut cfg: bi_am_rrt::Config,
+    seed: u64,
+) -> Result<(Option<Scene>, Option<Scene>)> {
     cfg.max_expansions_per_call = 1;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
     with_planner(prep, cfg, seed, |p| {
@@ -85,16 +89,17 @@ fn meet_scene(prep: &Prepared, mut cfg: bi_am_rrt::Config, seed: u64) -> Result<
         for _ in 0..1_000_000 {
             let reverse = draw::edges(p.reverse_tree());
             if p.grow(&clock).goal_in_tree {
-                let Some(meet) = p.stats().meet else {
-                    return Ok(None);
-                };
-                let mut s = scene(p, &[prep.scenario.start], &prep.scenario, 0, String::new());
-                s.reverse = reverse;
-                s.meet = Some(meet);
-                return Ok(Some(s));
+                let mut found = scene(p, &[prep.scenario.start], &prep.scenario, 0, String::new());
+                found.reverse = reverse;
+                let meet = p.stats().meet.filter(|_| cfg.bidirectional).map(|m| {
+                    let mut s = found.clone();
+                    s.meet = Some(m);
+                    s
+                });
+                return Ok((Some(found), meet));
             }
         }
-        Ok(None)
+        Ok((None, None))
     })
 }
 
@@ -108,6 +113,14 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(t) = args.t_exp {
         anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");
         cfg.t_exp = t;
+    }
+    let paper = args.pace == crate::results::Pace::Paper;
+    if paper {
+        anyhow::ensure!(
+            args.clock == ClockKind::Virtual,
+            "--pace paper needs --clock virtual (every call lasts its full t_exp)"
+        );
+        crate::experiment::paper_pace(&mut cfg);
     }
     if let Some(r) = args.obstacle {
         let size = args.scenario.map.grid();
@@ -125,7 +138,6 @@ pub fn run(args: &RunArgs) -> Result<()> {
         vec![0]
     };
     let mut trail = vec![prep.scenario.start];
-    let mut found_drawn = false;
     let mut disc = args.obstacle.map(crate::sim::DiscTrack::new);
     let mut avoided_drawn = false;
     let wall_clock = WallClock::new();
@@ -135,6 +147,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
     };
     let leg_starts = crate::optimum::leg_starts(&prep.scenario);
+    let t_exp_ticks = virtual_clock.ticks(cfg.t_exp);
+    let call_end = std::cell::Cell::new(0u64);
     let mut pictures: Vec<String> = Vec::new();
     let out = args.out.clone();
     let painter = Painter::new(prep.scenario.map.grid(), 800);
@@ -157,6 +171,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let mut failure: Option<anyhow::Error> = None;
     let (runs, final_nodes) = with_planner(&prep, cfg, args.seed, |p| {
         let hook = |p: &mut SimPlanner<'_, '_>, gi: usize, agent: Point, call: u32| {
+            // At the paper's pace every call lasts its full t_exp (as `experiment`).
+            if paper {
+                let end = call_end
+                    .get()
+                    .saturating_add(t_exp_ticks)
+                    .max(virtual_clock.peek());
+                virtual_clock.set(end);
+                call_end.set(end);
+            }
             if trail.last() != Some(&agent) {
                 trail.push(agent);
             }
@@ -169,17 +192,6 @@ pub fn run(args: &RunArgs) -> Result<()> {
                     }
                 }
             };
-            if !found_drawn && p.goal_node().is_some() {
-                found_drawn = true;
-                let s = scene(
-                    p,
-                    &trail,
-                    &prep.scenario,
-                    gi,
-                    title("the goal joins (end of that call)"),
-                );
-                save("found.png", &s);
-            }
             let dropped = disc.as_ref().is_some_and(|d| d.disc.is_some());
             if dropped && !avoided_drawn {
                 let mut path = vec![Point::ZERO; p.tree().len().max(1)];
@@ -240,7 +252,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(e) = failure {
         return Err(e.context("drawing a picture"));
     }
-    if let Some(mut s) = meet_scene(&prep, cfg, args.seed)? {
+    let (found, meet) = join_scenes(&prep, cfg, args.seed)?;
+    if let Some(mut s) = found {
+        s.title = title("goal 1 joins the tree (replayed one expansion per call)");
+        painter.png(&s, &args.out.join("found.png"))?;
+        pictures.insert(0, "found.png".into());
+    }
+    if let Some(mut s) = meet {
         s.title = title("the trees meet (replayed one expansion per call)");
         painter.png(&s, &args.out.join("meet.png"))?;
         pictures.insert(0, "meet.png".into());
