@@ -598,8 +598,11 @@ pub struct Merged {
 }
 
 /// Joins results folders with equal settings into `out` (rows in canonical order, JSON,
-/// summaries, a manifest without a shard). A run found in two inputs is an error; runs of the
-/// matrix that no input holds are counted in `missing` (and named on stderr).
+/// summaries, a manifest without a shard). The folders may also be *seed blocks*: the same
+/// settings but for `seed` and `repeats`, whose seed ranges are disjoint and together
+/// contiguous (`--seed 1 --repeats 5`, `--seed 6 --repeats 5`, ...): the merged folder holds
+/// the whole range. A run found in two inputs is an error; runs of the matrix that no input
+/// holds are counted in `missing` (and named on stderr).
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     if inputs.is_empty() {
         bail!("merge: no input folders");
@@ -607,6 +610,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     let mut manifest: Option<Manifest> = None;
     let mut rows: Vec<Row> = Vec::new();
     let mut seen: BTreeSet<RunKey> = BTreeSet::new();
+    let mut blocks: Vec<(u64, u32)> = Vec::new();
     for dir in inputs {
         let m = Manifest::read(dir)?.with_context(|| {
             format!(
@@ -615,7 +619,12 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
             )
         })?;
         if let Some(first) = &manifest
-            && let Some(d) = m.settings.difference(&first.settings)
+            && let Some(d) = {
+                let mut a = m.settings.clone();
+                a.seed = first.settings.seed;
+                a.repeats = first.settings.repeats;
+                a.difference(&first.settings)
+            }
         {
             bail!(
                 "{} and {} were run with different settings ({d})",
@@ -636,10 +645,27 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         }
         seen.extend(here);
         rows.extend(r);
+        blocks.push((m.settings.seed, m.settings.repeats));
         manifest.get_or_insert(m);
     }
     let mut m = manifest.context("no manifest")?;
     m.shard = None;
+    // Seed blocks: one range without gaps or overlaps (shards of one matrix repeat theirs).
+    blocks.sort_unstable();
+    blocks.dedup();
+    let first = blocks[0].0;
+    let mut next = first;
+    for &(seed, repeats) in &blocks {
+        if seed != next {
+            bail!(
+                "the inputs' seeds do not make one range: seeds {seed}.. follow {first}..{}",
+                next.saturating_sub(1)
+            );
+        }
+        next = seed + u64::from(repeats);
+    }
+    m.settings.seed = first;
+    m.settings.repeats = u32::try_from(next - first).context("too many seeds")?;
     let wanted = m.settings.runs();
     let missing: Vec<&RunKey> = wanted.iter().filter(|k| !seen.contains(k)).collect();
     for k in missing.iter().take(10) {

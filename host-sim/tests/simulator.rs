@@ -220,6 +220,62 @@ fn rows_without_wall_time(dir: &Path) -> Vec<String> {
         .collect()
 }
 
+/// Issue 24: a matrix run in seed blocks (`--seed 3 --repeats 1`, `--seed 4 --repeats 2`)
+/// merges into the folder of one run over seeds 3-5; blocks that leave a gap are refused.
+#[test]
+fn seed_blocks_merge_into_one_matrix() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_builtin_file(dir.path());
+    let args = |out: &Path, seed: u64, repeats: u32| ExperimentArgs {
+        scenarios: maps::load_scenarios(&file, Some(&["maze".into()])).unwrap(),
+        planners: experiment::parse_planners("AM-RRT*(E),Bi-AM-RRT*(E)").unwrap(),
+        repeats,
+        clock: ClockKind::Virtual,
+        goals: Goals::First,
+        seed,
+        jobs: Some(2),
+        faithful: false,
+        wait_from_set: false,
+        pace: host_sim::results::Pace::Full,
+        as_printed: bi_am_rrt::AsPrinted::NONE,
+        meet_all_pairs: false,
+        obstacle: None,
+        keep_reverse_branches: false,
+        search_only: true,
+        anytime_ms: 0,
+        table: TableOptions::default(),
+        t_exp: Some(std::time::Duration::from_millis(5)),
+        shard: None,
+        existing: Existing::Refuse,
+        out: out.to_path_buf(),
+    };
+    let whole = dir.path().join("whole");
+    experiment::run(&args(&whole, 3, 3)).unwrap();
+    let (a, b, c) = (
+        dir.path().join("a"),
+        dir.path().join("b"),
+        dir.path().join("c"),
+    );
+    experiment::run(&args(&a, 3, 1)).unwrap();
+    experiment::run(&args(&b, 4, 2)).unwrap();
+    experiment::run(&args(&c, 5, 1)).unwrap();
+    let merged = dir.path().join("merged");
+    let m = host_sim::results::merge(&[b.clone(), a.clone()], &merged).unwrap();
+    assert_eq!((m.runs, m.missing), (6, 0));
+    assert_eq!(
+        rows_without_wall_time(&merged),
+        rows_without_wall_time(&whole)
+    );
+    let s = host_sim::results::Manifest::read(&merged)
+        .unwrap()
+        .unwrap()
+        .settings;
+    assert_eq!((s.seed, s.repeats), (3, 3));
+    // A gap (seeds 3 and 5) and an overlap (4-5 and 5) are refused.
+    assert!(host_sim::results::merge(&[a, c.clone()], &dir.path().join("gap")).is_err());
+    assert!(host_sim::results::merge(&[b, c], &dir.path().join("overlap")).is_err());
+}
+
 /// Issue 9: an interrupted matrix keeps its rows and `--resume` does the rest; `--shard K/N`
 /// slices and `merge` joins them; every way gives the rows of one uninterrupted run.
 #[test]
@@ -941,8 +997,8 @@ fn a_short_soak_changes_goals_and_stays_safe() {
 fn docs_results_is_the_report_of_its_data() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let docs = root.join("docs");
-    // Full speed (results.md), the paper's pace (results-pace.md), its sigma study.
-    for page in ["results", "results-pace", "results-sigma"] {
+    // Full speed (results.md), the paper's pace (results-pace.md), its sigma study, Fig. 7.
+    for page in ["results", "results-pace", "results-sigma", "results-fig7"] {
         let notes = std::fs::read_to_string(docs.join(format!("{page}-notes.md"))).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(format!("{page}.md"));
