@@ -152,7 +152,7 @@ impl Deadline {
 /// deadline) and the clock's rate per unit of work (between consecutive readings), and lets
 /// the interval grow from
 /// `every` up to `most` units so that a reading costs about 1/[`PACE`] of the work between
-/// two. A CPU-time clock (a system call) is then read every few thousand units; a cycle
+/// two, but never past the units that took 1/[`GAP_PER_SECOND`] of a second at that rate. A CPU-time clock (a system call) is then read every few thousand units; a cycle
 /// counter or a virtual clock, whose readings cost next to nothing, still every `every`.
 #[derive(Debug)]
 pub struct Meter<'c, C: Clock + ?Sized> {
@@ -176,6 +176,13 @@ pub struct Meter<'c, C: Clock + ?Sized> {
 /// A paced meter ([`Meter::paced`]) spaces its readings so that one costs about `1 / PACE` of
 /// the work between two (under 1 %).
 pub const PACE: u64 = 128;
+
+/// A paced meter never lets more work pass between two readings than took `1 / GAP_PER_SECOND`
+/// of a second (0.25 ms) at the rate it measured: pacing by a reading's cost alone let 8,192
+/// units pass unread on a Cortex-M4F, where they can take milliseconds, and the tuned set's
+/// calls ran up to 19 ms over `t_exp` (issue 25). Units vary in cost, so the bound is a
+/// quarter of the 1 ms a call may overrun.
+pub const GAP_PER_SECOND: u64 = 4_000;
 
 impl<'c, C: Clock + ?Sized> Meter<'c, C> {
     /// A meter over `clock` without a work cap.
@@ -256,7 +263,13 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             .saturating_mul(du)
             .checked_div(dt)
             .unwrap_or(u64::MAX);
-        let paced = units.max(u64::from(self.every)).min(u64::from(self.most));
+        // ... and never more than a gap of 1 / GAP_PER_SECOND s at that rate.
+        let gap = (self.clock.ticks_per_second() / GAP_PER_SECOND).max(1);
+        let by_time = gap.saturating_mul(du).checked_div(dt).unwrap_or(u64::MAX);
+        let paced = units
+            .min(by_time)
+            .max(u64::from(self.every))
+            .min(u64::from(self.most));
         self.pace.set(u32::try_from(paced).unwrap_or(self.most));
     }
 
@@ -466,7 +479,12 @@ mod tests {
     /// 100,000 deadline checks of one unit each, after `work_first` units charged before the
     /// first check.
     fn paced_readings(step: u64, work_first: u32) -> heapless::Vec<u64, 512> {
-        let c = FakeClock::nanos().with_step(step).with_work_cost(10);
+        paced_readings_at(step, 10, work_first)
+    }
+
+    /// [`paced_readings`] with work costing `unit_ns` a unit.
+    fn paced_readings_at(step: u64, unit_ns: u64, work_first: u32) -> heapless::Vec<u64, 512> {
+        let c = FakeClock::nanos().with_step(step).with_work_cost(unit_ns);
         let origin = c.now();
         let m = Meter::new(&c).reading_every(256).paced(8192, origin);
         let mut at = heapless::Vec::<u64, 512>::new();
@@ -530,6 +548,22 @@ mod tests {
     #[test]
     fn regression_pacing_engages_after_work_before_the_first_check() {
         assert_paced(100);
+    }
+
+    /// Issue 25: on a Cortex-M4F the tuned set's paced readings let up to 8,192 units pass
+    /// unread, milliseconds of work there, and calls ran 19 ms over `t_exp`. A costly reading
+    /// (5 us) with slow work (100 ns a unit) paces by cost to about 6,400 units (0.64 ms); the
+    /// time bound keeps the work between two readings under 0.25 ms (2,450 units).
+    #[test]
+    fn regression_paced_readings_leave_at_most_a_quarter_millisecond_unread() {
+        let at = paced_readings_at(5_000, 100, 0);
+        let gaps: heapless::Vec<u64, 512> = at.windows(2).map(|w| w[1] - w[0]).collect();
+        assert!(gaps.len() > 20, "{gaps:?}");
+        let settled = &gaps[3..];
+        assert!(
+            settled.iter().all(|&g| (2_300..=2_500).contains(&g)),
+            "{gaps:?}"
+        );
     }
 
     #[test]
