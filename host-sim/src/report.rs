@@ -969,6 +969,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             match *stat {
                 "mean" => Ok(fmt(mean(sample))),
                 "median" => Ok(fmt(Spread::of(sample.to_vec()).median)),
+                "max" => Ok(fmt(sample.iter().copied().reduce(f64::max))),
                 "change" => {
                     let (_, orig) = scheme(planner)
                         .filter(|(s, _)| *s != Scheme::Original)
@@ -985,7 +986,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                     };
                     Ok(pct_p(change(mean(os), mean(sample)), os, sample))
                 }
-                _ => anyhow::bail!("statistic {stat:?}: mean, median, change or scheme"),
+                _ => anyhow::bail!("statistic {stat:?}: mean, median, max, change or scheme"),
             }
         };
         let filled = fill(n, resolve).context("the notes quote the data")?;

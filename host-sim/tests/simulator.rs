@@ -998,7 +998,13 @@ fn docs_results_is_the_report_of_its_data() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let docs = root.join("docs");
     // Full speed (results.md), the paper's pace (results-pace.md), its sigma study, Fig. 7.
-    for page in ["results", "results-pace", "results-sigma", "results-fig7"] {
+    for page in [
+        "results",
+        "results-pace",
+        "results-sigma",
+        "results-fig7",
+        "results-fig7-full",
+    ] {
         let notes = std::fs::read_to_string(docs.join(format!("{page}-notes.md"))).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(format!("{page}.md"));
