@@ -920,6 +920,43 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             let [stat, measure, rest @ ..] = args else {
                 anyhow::bail!("expected STAT|MEASURE|...");
             };
+            if *stat == "maps" {
+                // {{maps|MEASURE|PLANNER|MAP_A|MAP_B}}: medians on both maps and the
+                // Mann-Whitney p of the two samples, e.g. `600 -> 300 ms (p 0.02)`.
+                let [planner, a, b] = rest else {
+                    anyhow::bail!("expected maps|MEASURE|PLANNER|MAP_A|MAP_B");
+                };
+                anyhow::ensure!(
+                    planners.iter().any(|p| p == planner)
+                        && maps.iter().any(|m| m == a)
+                        && maps.iter().any(|m| m == b),
+                    "no planner {planner:?} on maps {a:?} and {b:?} in this folder"
+                );
+                let (ca, cb) = (cell(planner, a), cell(planner, b));
+                let pick = |c: &Cell| -> Result<(Vec<f64>, f64)> {
+                    Ok(match *measure {
+                        "search" => (c.search_s.clone(), 1e3),
+                        "path" => (c.path_m.clone(), 1.0),
+                        "ratio" => (c.ratio.clone(), 1.0),
+                        "nodes" => (c.nodes.clone(), 1.0),
+                        _ => anyhow::bail!("maps compares search, path, ratio or nodes"),
+                    })
+                };
+                let ((sa, k), (sb, _)) = (pick(&ca)?, pick(&cb)?);
+                let show = |v: Option<f64>| match (*measure, v) {
+                    (_, None) => "-".to_string(),
+                    ("ratio", Some(v)) => format!("{v:.3}"),
+                    ("nodes", Some(v)) => format!("{v:.0}"),
+                    (_, Some(v)) => num(v * k),
+                };
+                let p = crate::stats::mann_whitney_p(&sa, &sb)
+                    .map_or(String::new(), |p| format!(" (p {p:.2})"));
+                return Ok(format!(
+                    "{} -> {}{p}",
+                    show(Spread::of(sa.clone()).median),
+                    show(Spread::of(sb.clone()).median)
+                ));
+            }
             if *stat == "scheme" {
                 let [label, map] = rest else {
                     anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
