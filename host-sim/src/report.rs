@@ -957,16 +957,57 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                     show(Spread::of(sb.clone()).median)
                 ));
             }
-            if *stat == "scheme" {
-                let [label, map] = rest else {
-                    anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
-                };
-                let sch = match *label {
+            let scheme_of = |label: &str| -> Result<Scheme> {
+                Ok(match label {
                     "-1" => Scheme::Bidirectional,
                     "-2" => Scheme::Rewiring,
                     "bi" => Scheme::Both,
                     _ => anyhow::bail!("scheme {label:?}: -1, -2 or bi"),
+                })
+            };
+            if *stat == "pairs" {
+                // {{pairs|MEASURE|SCHEME}}: over every planner pair of the scheme on every
+                // map, how many changes of the mean are below zero, and the span of their p.
+                let [label] = rest else {
+                    anyhow::bail!("expected pairs|search or path|-1, -2 or bi");
                 };
+                let sch = scheme_of(label)?;
+                let (mut below, mut all, mut ps) = (0, 0, Vec::new());
+                for m in &maps {
+                    for p in &planners {
+                        let Some((s, o)) = scheme(p) else { continue };
+                        if s != sch || !planners.contains(&o) {
+                            continue;
+                        }
+                        let (co, cp) = (cell(&o, m), cell(p, m));
+                        let (a, b) = match *measure {
+                            "search" => (&co.search_s, &cp.search_s),
+                            "path" => (&co.path_m, &cp.path_m),
+                            _ => anyhow::bail!("pairs compares search or path"),
+                        };
+                        if let Some(c) = change(mean(a), mean(b)) {
+                            all += 1;
+                            below += usize::from(c < 0.0);
+                        }
+                        ps.extend(crate::stats::mann_whitney_p(a, b));
+                    }
+                }
+                let lo = ps.iter().copied().reduce(f64::min).context("no pairs")?;
+                let hi = ps.iter().copied().reduce(f64::max).context("no pairs")?;
+                let span = if hi < 0.01 {
+                    "every Mann-Whitney p below 0.01".to_string()
+                } else {
+                    format!("Mann-Whitney p {lo:.2}-{hi:.2}")
+                };
+                return Ok(format!(
+                    "{below} of the {all} planner-map pairs below zero ({span})"
+                ));
+            }
+            if *stat == "scheme" {
+                let [label, map] = rest else {
+                    anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
+                };
+                let sch = scheme_of(label)?;
                 let (_, _, ds, dp, _) = scheme_changes
                     .iter()
                     .find(|(s, m, ..)| *s == sch && m == map)
