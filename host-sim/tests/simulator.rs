@@ -63,6 +63,35 @@ fn scenario_files_read_pngs_with_the_mean_rule() {
     assert!(maps::load_scenarios(&file, Some(&["nope".to_string()])).is_err());
 }
 
+/// Experiment arguments with what the tests share (virtual clock, goal 1, one repeat from seed
+/// 1, two jobs, full pace, every switch off, no anytime run, each planner's own `t_exp`, an
+/// existing folder refused); a test sets what it is about with `..base_args(...)`.
+fn base_args(scenarios: Vec<maps::Scenario>, planners: &str, out: &Path) -> ExperimentArgs {
+    ExperimentArgs {
+        scenarios,
+        planners: experiment::parse_planners(planners).unwrap(),
+        repeats: 1,
+        clock: ClockKind::Virtual,
+        goals: Goals::First,
+        seed: 1,
+        jobs: Some(2),
+        faithful: false,
+        wait_from_set: false,
+        pace: host_sim::results::Pace::Full,
+        as_printed: bi_am_rrt::AsPrinted::NONE,
+        meet_all_pairs: false,
+        obstacle: None,
+        keep_reverse_branches: false,
+        search_only: false,
+        anytime_ms: 0,
+        table: TableOptions::default(),
+        t_exp: None,
+        shard: None,
+        existing: Existing::Refuse,
+        out: out.to_path_buf(),
+    }
+}
+
 /// Issue 24: at the paper's pace a call makes at most 20 expansions and lasts its full
 /// `t_exp` on the virtual clock, so the end-of-call search time is a whole number of calls;
 /// the wall clock is refused.
@@ -72,27 +101,14 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
     let file = write_builtin_file(dir.path());
     let out = dir.path().join("out");
     let mut args = ExperimentArgs {
-        scenarios: maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap(),
-        planners: experiment::parse_planners("AM-RRT*(E),Bi-AM-RRT*(E)").unwrap(),
         repeats: 2,
-        clock: ClockKind::Virtual,
-        goals: Goals::First,
-        seed: 1,
-        jobs: Some(2),
-        faithful: false,
-        wait_from_set: false,
         pace: host_sim::results::Pace::Paper,
-        as_printed: bi_am_rrt::AsPrinted::NONE,
-        meet_all_pairs: false,
-        obstacle: None,
-        keep_reverse_branches: false,
         search_only: true,
-        anytime_ms: 0,
-        table: TableOptions::default(),
-        t_exp: None,
-        shard: None,
-        existing: Existing::Refuse,
-        out: out.clone(),
+        ..base_args(
+            maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap(),
+            "AM-RRT*(E),Bi-AM-RRT*(E)",
+            &out,
+        )
     };
     experiment::run(&args).unwrap();
     let mut rdr = csv::Reader::from_path(out.join("runs.csv")).unwrap();
@@ -131,27 +147,15 @@ fn the_experiment_writes_one_row_per_run() {
     let file = write_builtin_file(dir.path());
     let out = dir.path().join("out");
     let args = ExperimentArgs {
-        scenarios: maps::load_scenarios(&file, Some(&["open".to_string()])).unwrap(),
-        planners: experiment::parse_planners("Bi-AM-RRT*(D),RT-RRT*").unwrap(),
         repeats: 2,
-        clock: ClockKind::Virtual,
-        goals: Goals::First,
-        seed: 1,
-        jobs: Some(2),
-        faithful: false,
-        wait_from_set: false,
-        pace: host_sim::results::Pace::Full,
-        as_printed: bi_am_rrt::AsPrinted::NONE,
-        meet_all_pairs: false,
-        obstacle: None,
         keep_reverse_branches: true,
-        search_only: false,
         anytime_ms: 5,
-        table: TableOptions::default(),
         t_exp: Some(std::time::Duration::from_millis(5)),
-        shard: None,
-        existing: Existing::Refuse,
-        out: out.clone(),
+        ..base_args(
+            maps::load_scenarios(&file, Some(&["open".to_string()])).unwrap(),
+            "Bi-AM-RRT*(D),RT-RRT*",
+            &out,
+        )
     };
     experiment::run(&args).unwrap();
     let mut rdr = csv::Reader::from_path(out.join("runs.csv")).unwrap();
@@ -227,27 +231,15 @@ fn seed_blocks_merge_into_one_matrix() {
     let dir = tempfile::tempdir().unwrap();
     let file = write_builtin_file(dir.path());
     let args = |out: &Path, seed: u64, repeats: u32| ExperimentArgs {
-        scenarios: maps::load_scenarios(&file, Some(&["maze".into()])).unwrap(),
-        planners: experiment::parse_planners("AM-RRT*(E),Bi-AM-RRT*(E)").unwrap(),
         repeats,
-        clock: ClockKind::Virtual,
-        goals: Goals::First,
         seed,
-        jobs: Some(2),
-        faithful: false,
-        wait_from_set: false,
-        pace: host_sim::results::Pace::Full,
-        as_printed: bi_am_rrt::AsPrinted::NONE,
-        meet_all_pairs: false,
-        obstacle: None,
-        keep_reverse_branches: false,
         search_only: true,
-        anytime_ms: 0,
-        table: TableOptions::default(),
         t_exp: Some(std::time::Duration::from_millis(5)),
-        shard: None,
-        existing: Existing::Refuse,
-        out: out.to_path_buf(),
+        ..base_args(
+            maps::load_scenarios(&file, Some(&["maze".into()])).unwrap(),
+            "AM-RRT*(E),Bi-AM-RRT*(E)",
+            out,
+        )
     };
     let whole = dir.path().join("whole");
     experiment::run(&args(&whole, 3, 3)).unwrap();
@@ -283,27 +275,17 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     let dir = tempfile::tempdir().unwrap();
     let file = write_builtin_file(dir.path());
     let args = |out: &Path, shard: Option<&str>, existing| ExperimentArgs {
-        scenarios: maps::load_scenarios(&file, Some(&["open".into(), "maze".into()])).unwrap(),
-        planners: experiment::parse_planners("AM-RRT*(E),Bi-AM-RRT*(E)").unwrap(),
         repeats: 2,
-        clock: ClockKind::Virtual,
-        goals: Goals::First,
         seed: 3,
-        jobs: Some(2),
-        faithful: false,
-        wait_from_set: false,
-        pace: host_sim::results::Pace::Full,
-        as_printed: bi_am_rrt::AsPrinted::NONE,
-        meet_all_pairs: false,
-        obstacle: None,
-        keep_reverse_branches: false,
         search_only: true,
-        anytime_ms: 0,
-        table: TableOptions::default(),
         t_exp: Some(std::time::Duration::from_millis(5)),
         shard: shard.map(|s| s.parse().unwrap()),
         existing,
-        out: out.to_path_buf(),
+        ..base_args(
+            maps::load_scenarios(&file, Some(&["open".into(), "maze".into()])).unwrap(),
+            "AM-RRT*(E),Bi-AM-RRT*(E)",
+            out,
+        )
     };
     let whole = dir.path().join("whole");
     let o = experiment::run(&args(&whole, None, Existing::Refuse)).unwrap();
@@ -1074,27 +1056,16 @@ fn regression_a_disc_that_blocks_a_joined_path_does_not_starve_the_tree() {
     let out = dir.path().join("out");
     for (planner, seed) in [("RT-RRT*-1", 16), ("RT-RRT*(D)-1", 12)] {
         let args = ExperimentArgs {
-            scenarios: maps::load_scenarios(&file, Some(&["bug_trap".to_string()])).unwrap(),
-            planners: experiment::parse_planners(planner).unwrap(),
-            repeats: 1,
-            clock: ClockKind::Virtual,
-            goals: Goals::First,
             seed,
             jobs: Some(1),
-            faithful: false,
-            wait_from_set: false,
             pace: host_sim::results::Pace::Paper,
-            as_printed: bi_am_rrt::AsPrinted::NONE,
-            meet_all_pairs: false,
             obstacle: Some(3.0),
-            keep_reverse_branches: false,
-            search_only: false,
-            anytime_ms: 0,
-            table: TableOptions::default(),
-            t_exp: None,
-            shard: None,
             existing: Existing::Overwrite,
-            out: out.clone(),
+            ..base_args(
+                maps::load_scenarios(&file, Some(&["bug_trap".to_string()])).unwrap(),
+                planner,
+                &out,
+            )
         };
         experiment::run(&args).unwrap();
         let mut rdr = csv::Reader::from_path(out.join("runs.csv")).unwrap();
