@@ -411,7 +411,17 @@ mod tests {
         last
     }
 
-    /// An empty 20 x 20 m map and a configuration with `printed`.
+    /// The Euclidean environment of `map` and `cfg`, without a call deadline.
+    fn euclidean_env<'a, 'm>(map: &'a Map<'m, 1>, cfg: &'a Config) -> Env<'a, 'm, Euclidean, 1> {
+        Env {
+            map,
+            metric: &Euclidean,
+            cfg,
+            call: Deadline::NEVER,
+        }
+    }
+
+    /// An empty 20 x 20 m map and the Euclidean Bi-AM-RRT* configuration.
     fn open_map(bits: &mut [u8]) -> (Map<'_, 1>, Config) {
         pack_grid(bits, 20, 20, |_, _| false).unwrap();
         let map = Map::new(OccupancyGrid::new(bits, 20, 20, 1.0).unwrap());
@@ -425,12 +435,7 @@ mod tests {
         let front_after_one_step = |take: bool| {
             let mut cfg = base;
             cfg.as_printed.alg4_takes_x_r2 = take;
-            let env = Env {
-                map: &map,
-                metric: &Euclidean,
-                cfg: &cfg,
-                call: Deadline::NEVER,
-            };
+            let env = euclidean_env(&map, &cfg);
             let clock = FakeClock::new(1);
             let meter = Meter::new(&clock);
             let mut store = TreeStore::<64, 16>::new();
@@ -463,12 +468,7 @@ mod tests {
         let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
         let (map, mut cfg) = open_map(&mut bits);
         cfg.as_printed = printed;
-        let env = Env {
-            map: &map,
-            metric: &Euclidean,
-            cfg: &cfg,
-            call: Deadline::NEVER,
-        };
+        let env = euclidean_env(&map, &cfg);
         let clock = FakeClock::new(1);
         let meter = Meter::new(&clock);
         let mut store = TreeStore::<64, 16>::new();
@@ -520,12 +520,7 @@ mod tests {
     fn algorithm_6_as_printed_compares_the_way_through_x_r1() {
         let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
         let (map, cfg) = open_map(&mut bits);
-        let env = Env {
-            map: &map,
-            metric: &Euclidean,
-            cfg: &cfg,
-            call: Deadline::NEVER,
-        };
+        let env = euclidean_env(&map, &cfg);
         let clock = FakeClock::new(1);
         let meter = Meter::new(&clock);
         for (via, rewired) in [(None, true), (Some(Point::new(2.0, 6.0)), false)] {
@@ -551,12 +546,7 @@ mod tests {
         pack_grid(&mut bits, 20, 20, |c, r| r == 10 && c < 12).unwrap();
         let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
         let cfg = Config::bi_am_rrt(crate::MetricKind::Euclidean);
-        let env = Env {
-            map: &map,
-            metric: &Euclidean,
-            cfg: &cfg,
-            call: Deadline::NEVER,
-        };
+        let env = euclidean_env(&map, &cfg);
         let clock = FakeClock::new(1);
         let meter = Meter::new(&clock);
         let mut store = TreeStore::<64, 16>::new();
