@@ -509,12 +509,41 @@ impl Cell {
         }
     }
 
+    /// The sample a notes quote names (`search`, `path`, `ratio`, `nodes`, `nodes_end`,
+    /// `replan`, `detour`).
+    fn measure(&self, name: &str) -> Result<&[f64]> {
+        Ok(match name {
+            "search" => &self.search_s,
+            "path" => &self.path_m,
+            "ratio" => &self.ratio,
+            "nodes" => &self.nodes,
+            "nodes_end" => &self.nodes_end,
+            "replan" => &self.replan_s,
+            "detour" => &self.detour,
+            _ => anyhow::bail!(
+                "measure {name:?}: search, path, ratio, nodes, nodes_end, replan or detour"
+            ),
+        })
+    }
+
     fn search_mean(&self) -> Option<f64> {
         mean(&self.search_s)
     }
 
     fn path_mean(&self) -> Option<f64> {
         mean(&self.path_m)
+    }
+}
+
+/// A value of the measure `name` ([`Cell::measure`]) as the notes quote it: times in ms,
+/// ratios with three decimals, node counts whole.
+fn show_measure(name: &str, v: Option<f64>) -> String {
+    match (name, v) {
+        (_, None) => "-".to_string(),
+        ("ratio" | "detour", Some(v)) => format!("{v:.3}"),
+        ("nodes" | "nodes_end", Some(v)) => format!("{v:.0}"),
+        ("search" | "replan", Some(v)) => num(v * 1e3),
+        (_, Some(v)) => num(v),
     }
 }
 
@@ -933,28 +962,13 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                     "no planner {planner:?} on maps {a:?} and {b:?} in this folder"
                 );
                 let (ca, cb) = (cell(planner, a), cell(planner, b));
-                let pick = |c: &Cell| -> Result<(Vec<f64>, f64)> {
-                    Ok(match *measure {
-                        "search" => (c.search_s.clone(), 1e3),
-                        "path" => (c.path_m.clone(), 1.0),
-                        "ratio" => (c.ratio.clone(), 1.0),
-                        "nodes" => (c.nodes.clone(), 1.0),
-                        _ => anyhow::bail!("maps compares search, path, ratio or nodes"),
-                    })
-                };
-                let ((sa, k), (sb, _)) = (pick(&ca)?, pick(&cb)?);
-                let show = |v: Option<f64>| match (*measure, v) {
-                    (_, None) => "-".to_string(),
-                    ("ratio", Some(v)) => format!("{v:.3}"),
-                    ("nodes", Some(v)) => format!("{v:.0}"),
-                    (_, Some(v)) => num(v * k),
-                };
-                let p = crate::stats::mann_whitney_p(&sa, &sb)
+                let (sa, sb) = (ca.measure(measure)?, cb.measure(measure)?);
+                let p = crate::stats::mann_whitney_p(sa, sb)
                     .map_or(String::new(), |p| format!(" (p {p:.2})"));
                 return Ok(format!(
                     "{} -> {}{p}",
-                    show(Spread::of(sa.clone()).median),
-                    show(Spread::of(sb.clone()).median)
+                    show_measure(measure, Spread::of(sa.to_vec()).median),
+                    show_measure(measure, Spread::of(sb.to_vec()).median)
                 ));
             }
             let scheme_of = |label: &str| -> Result<Scheme> {
@@ -969,7 +983,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 // {{pairs|MEASURE|SCHEME}}: over every planner pair of the scheme on every
                 // map, how many changes of the mean are below zero, and the span of their p.
                 let [label] = rest else {
-                    anyhow::bail!("expected pairs|search or path|-1, -2 or bi");
+                    anyhow::bail!("expected pairs|MEASURE|-1, -2 or bi");
                 };
                 let sch = scheme_of(label)?;
                 let (mut below, mut all, mut ps) = (0, 0, Vec::new());
@@ -980,11 +994,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                             continue;
                         }
                         let (co, cp) = (cell(&o, m), cell(p, m));
-                        let (a, b) = match *measure {
-                            "search" => (&co.search_s, &cp.search_s),
-                            "path" => (&co.path_m, &cp.path_m),
-                            _ => anyhow::bail!("pairs compares search or path"),
-                        };
+                        let (a, b) = (co.measure(measure)?, cp.measure(measure)?);
                         if let Some(c) = change(mean(a), mean(b)) {
                             all += 1;
                             below += usize::from(c < 0.0);
@@ -1026,24 +1036,8 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 "no planner {planner:?} on map {map:?} in this folder"
             );
             let c = cell(planner, map);
-            let (sample, scale): (&[f64], f64) = match *measure {
-                "search" => (&c.search_s, 1e3),
-                "path" => (&c.path_m, 1.0),
-                "ratio" => (&c.ratio, 1.0),
-                "nodes" => (&c.nodes, 1.0),
-                "nodes_end" => (&c.nodes_end, 1.0),
-                "replan" => (&c.replan_s, 1e3),
-                "detour" => (&c.detour, 1.0),
-                _ => anyhow::bail!(
-                    "measure {measure:?}: search, path, ratio, nodes, nodes_end, replan or detour"
-                ),
-            };
-            let fmt = |v: Option<f64>| match (*measure, v) {
-                (_, None) => "-".to_string(),
-                ("ratio" | "detour", Some(v)) => format!("{v:.3}"),
-                ("nodes" | "nodes_end", Some(v)) => format!("{v:.0}"),
-                (_, Some(v)) => num(v * scale),
-            };
+            let sample = c.measure(measure)?;
+            let fmt = |v: Option<f64>| show_measure(measure, v);
             match *stat {
                 "mean" => Ok(fmt(mean(sample))),
                 "median" => Ok(fmt(Spread::of(sample.to_vec()).median)),
@@ -1053,15 +1047,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                         .filter(|(s, _)| *s != Scheme::Original)
                         .with_context(|| format!("{planner} is an original planner"))?;
                     let o = cell(&orig, map);
-                    let os: &[f64] = match *measure {
-                        "search" => &o.search_s,
-                        "path" => &o.path_m,
-                        "ratio" => &o.ratio,
-                        "nodes_end" => &o.nodes_end,
-                        "replan" => &o.replan_s,
-                        "detour" => &o.detour,
-                        _ => &o.nodes,
-                    };
+                    let os = o.measure(measure)?;
                     Ok(pct_p(change(mean(os), mean(sample)), os, sample))
                 }
                 _ => anyhow::bail!("statistic {stat:?}: mean, median, max, change or scheme"),
@@ -1364,25 +1350,20 @@ fn fig7(
         );
         let mut samples = Vec::new();
         for p in planners {
-            let rs: Vec<&&Row> = goal1
+            let rs: Vec<&Row> = goal1
                 .iter()
                 .filter(|r| &r.planner == p && &r.scenario == m)
+                .copied()
                 .collect();
-            let dropped: Vec<&&&Row> = rs.iter().filter(|r| r.disc_r_m.is_some()).collect();
-            let calls: Vec<f64> = dropped
-                .iter()
-                .filter_map(|r| r.replan_s.map(|s| (s / t_exp_s).round()))
-                .collect();
+            let dropped: Vec<&&Row> = rs.iter().filter(|r| r.disc_r_m.is_some()).collect();
+            let Cell {
+                replan_s, detour, ..
+            } = Cell::of(&rs);
+            let calls: Vec<f64> = replan_s.iter().map(|s| (s / t_exp_s).round()).collect();
             let never = dropped.iter().filter(|r| r.replan_s.is_none()).count();
             let cost: Vec<f64> = dropped
                 .iter()
                 .filter_map(|r| Some(f64::from(r.replanned_cost_m? / r.cost_before_drop_m?)))
-                .collect();
-            let detour: Vec<f64> = dropped
-                .iter()
-                .filter_map(|r| {
-                    Some(f64::from(r.travelled_after_drop_m?) / f64::from(r.optimal_after_drop_m?))
-                })
                 .collect();
             let c = Spread::of(calls.clone());
             let d = Spread::of(detour.clone());
