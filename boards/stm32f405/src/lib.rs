@@ -1,0 +1,184 @@
+//! The planner on a real STM32F405 board: what `examples/firmware.rs` runs under QEMU (the
+//! paper's Algorithm 1 loop, Bi-AM-RRT*(D) with `t_exp` = 150 ms on the office scenario, the
+//! grid and diffusion table in flash), set up as a board needs it:
+//!
+//! - **Clocks**: 168 MHz from the PLL on the board's crystal ([`HSE_HZ`]), five flash wait
+//!   states and the ART accelerator on ([`init`]). Without this the chip runs at 16 MHz on its
+//!   HSI and every "150 ms" SysTick budget lasts about 1.6 s.
+//! - **Logging and panics**: `defmt` over RTT and `panic-probe` (a probe reads both; with no
+//!   probe attached the firmware still runs, where semihosting would HardFault).
+//! - **Watchdog**: the independent watchdog ([`WATCHDOG_US`]), fed after every `plan` call.
+//! - **Stack guard**: `flip-link` places the stack below `.bss`, so an overflow faults
+//!   instead of writing over the planner's trees.
+//!
+//! The planner code is the crate's, unchanged: the same `Planner`, storage and `SysTickClock`
+//! as the QEMU firmware, so the QEMU figures carry over (a 168 MHz M4F with the ART on runs
+//! about 1.1-1.5 cycles per instruction, `docs/board.md`).
+#![no_std]
+
+use bi_am_rrt::{Config, DiffusionTable, Map, MetricKind, OccupancyGrid, Planner, Point, Storage};
+use embassy_stm32::time::Hertz;
+use rand_xorshift::XorShiftRng;
+
+/// The scenario last exported by `host-sim export` to `BIAMRRT_FLASH_DIR` (grid and table as
+/// flash `static`s): the office in CI, or any other map.
+#[allow(dead_code)]
+pub mod scenario {
+    include!(concat!(env!("BIAMRRT_FLASH_DIR"), "/scenario.rs"));
+}
+
+/// The board's crystal: 12 MHz on the Adafruit Feather STM32F405 Express. Change it (and
+/// [`PLL_PREDIV`]) for another board: 8 MHz with `DIV4` on an STM32F4-Discovery, 25 MHz with
+/// `DIV25`... the PLL wants 1-2 MHz at its input.
+pub const HSE_HZ: u32 = 12_000_000;
+/// The PLL's input divider: `HSE_HZ` / 6 = 2 MHz.
+pub const PLL_PREDIV: embassy_stm32::rcc::PllPreDiv = embassy_stm32::rcc::PllPreDiv::DIV6;
+/// The core clock [`init`] sets up: 2 MHz x 168 / 2 (and / 7 = 48 MHz for USB).
+pub const CORE_HZ: u32 = 168_000_000;
+/// The watchdog's timeout: a `plan` call lasts `t_exp` (150 ms) and a little, so a call
+/// that runs away (or a task that stops feeding it) resets the chip within half a second.
+pub const WATCHDOG_US: u32 = 500_000;
+
+/// Two trees of 2,048 nodes and 256 index buckets each (90,288 bytes in `.bss`), as in the
+/// QEMU firmware.
+pub type BoardStorage = Storage<2048, 256>;
+/// The planner the examples fly: the diffusion metric on the scenario in flash, up to four
+/// dynamic obstacles.
+pub type BoardPlanner =
+    Planner<'static, 'static, DiffusionTable<'static>, XorShiftRng, 2048, 256, 4>;
+
+/// Brings the chip up: the PLL on the crystal at 168 MHz (APB1 42 MHz, APB2 84 MHz), the
+/// flash wait states for it, then the ART accelerator (prefetch, instruction and data caches).
+pub fn init() -> embassy_stm32::Peripherals {
+    use embassy_stm32::rcc::{
+        AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllQDiv, PllSource, Sysclk,
+    };
+    let mut config = embassy_stm32::Config::default();
+    config.rcc.hse = Some(Hse {
+        freq: Hertz(HSE_HZ),
+        mode: HseMode::Oscillator,
+    });
+    config.rcc.pll_src = PllSource::HSE;
+    config.rcc.pll = Some(Pll {
+        prediv: PLL_PREDIV,
+        mul: PllMul::MUL168,
+        divp: Some(PllPDiv::DIV2),
+        divq: Some(PllQDiv::DIV7),
+        divr: None,
+    });
+    config.rcc.sys = Sysclk::PLL1_P;
+    config.rcc.ahb_pre = AHBPrescaler::DIV1;
+    config.rcc.apb1_pre = APBPrescaler::DIV4;
+    config.rcc.apb2_pre = APBPrescaler::DIV2;
+    let p = embassy_stm32::init(config);
+    // embassy-stm32 0.6 writes FLASH_ACR whole when it sets the wait states, which leaves the
+    // ART accelerator off (code from flash would then stall 5 cycles on most fetches).
+    embassy_stm32::pac::FLASH.acr().modify(|w| {
+        w.set_prften(true);
+        w.set_icen(true);
+        w.set_dcen(true);
+    });
+    p
+}
+
+/// What can stop the planner from starting.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub enum BoardError {
+    /// The grid or the table in flash does not decode.
+    Scenario,
+    /// The planner refused its configuration or start.
+    Setup,
+}
+
+/// The planner at the scenario's start: Bi-AM-RRT*(D) with lengths that follow the map,
+/// `sigma` from the scenario, the paper's set or (`tuned`) the tuned one, seed 1.
+pub fn planner(
+    storage: &'static mut BoardStorage,
+    tuned: bool,
+) -> Result<BoardPlanner, BoardError> {
+    use rand_core::SeedableRng;
+    let grid = OccupancyGrid::new(
+        &scenario::GRID,
+        scenario::COLS,
+        scenario::ROWS,
+        scenario::CELL,
+    )
+    .map_err(|_| BoardError::Scenario)?;
+    let table = DiffusionTable::new(&scenario::TABLE).map_err(|_| BoardError::Scenario)?;
+    let base = Config::bi_am_rrt(MetricKind::Diffusion);
+    let base = if tuned { base.tuned() } else { base };
+    let cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    let rng = XorShiftRng::seed_from_u64(1);
+    Planner::new(storage, Map::new(grid), table, rng, cfg, start()).map_err(|_| BoardError::Setup)
+}
+
+/// The scenario's start.
+pub fn start() -> Point {
+    Point::new(scenario::START.0, scenario::START.1)
+}
+
+/// The scenario's goals in order.
+pub fn goals() -> impl Iterator<Item = Point> {
+    scenario::GOALS.iter().map(|&(x, y)| Point::new(x, y))
+}
+
+/// Per-call times of a run, in microseconds, for a median without allocation.
+pub struct CallTimes<const M: usize> {
+    us: [u32; M],
+    len: usize,
+    worst: u32,
+}
+
+impl<const M: usize> CallTimes<M> {
+    /// No calls yet.
+    pub const fn new() -> Self {
+        Self {
+            us: [0; M],
+            len: 0,
+            worst: 0,
+        }
+    }
+
+    /// Records one call of `us` microseconds (beyond `M` calls only the worst is kept).
+    pub fn record(&mut self, us: u32) {
+        self.worst = self.worst.max(us);
+        if let Some(slot) = self.us.get_mut(self.len) {
+            *slot = us;
+            self.len += 1;
+        }
+    }
+
+    /// Calls recorded.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether none was.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The worst call.
+    pub fn worst(&self) -> u32 {
+        self.worst
+    }
+
+    /// The median call (sorts what was recorded).
+    pub fn median(&mut self) -> u32 {
+        let recorded = &mut self.us[..self.len];
+        recorded.sort_unstable();
+        recorded.get(recorded.len() / 2).copied().unwrap_or(0)
+    }
+
+    /// Forgets the calls.
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.worst = 0;
+    }
+}
+
+impl<const M: usize> Default for CallTimes<M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
