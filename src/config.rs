@@ -197,9 +197,10 @@ pub struct Config {
     /// implementation). The call then overruns `t_exp` by at most this much work more.
     pub clock_every: u32,
     /// Above `clock_every`: the readings are paced by what they cost
-    /// ([`crate::clock::Meter::paced`]), at least `clock_every` and at most this many work
-    /// units apart, so that a reading costs under 1 % of the work between two. The call then
-    /// overruns `t_exp` by at most this much work more. 0 (or at most `clock_every`): every
+    /// ([`crate::clock::Meter::paced`]), at most this many work units apart (and never more
+    /// than 0.25 ms of work at the slowest rate measured), so that a reading costs under 1 %
+    /// of the work between two; `clock_every` apart while a reading's cost is not measurable
+    /// (a virtual clock), down to [`crate::clock::MIN_PACED`] for a cycle counter. 0 (or at most `clock_every`): every
     /// `clock_every` units (the paper).
     pub clock_every_max: u32,
     /// Density limit for new states inside the informed ellipse once the goal is in the tree
@@ -351,9 +352,9 @@ impl Config {
     /// engineering changes measured against the paper's parameters (`docs/performance.md`):
     /// - `clock_every` 256 and `clock_every_max` 8,192: the deadlines read the clock at most
     ///   every 256 work units instead of 50-80 times per expansion, and the readings are paced
-    ///   by what they cost: a CPU-time clock (about 0.5 us a reading here) is read every 8,192
-    ///   units (about 100 us), a cycle counter or a virtual clock still every 256 (a few us
-    ///   on the development machine, about 0.3 ms on a 168 MHz Cortex-M4F);
+    ///   by what they cost: a CPU-time clock (about 0.5 us a reading here) is read every few
+    ///   thousand units (at most 8,192, about 100 us), a cycle counter every few dozen (tens
+    ///   of us on a 168 MHz Cortex-M4F), a virtual clock still every 256;
     /// - rewiring visits 4 nodes per phase and expansion instead of 24: three times the
     ///   expansions, the same rewiring work per second;
     /// - `e_search` 20 m: long steps until the first solution (the edges are tested free as

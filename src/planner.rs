@@ -513,9 +513,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             self.anchor(agent, &meter);
         }
         let mut advanced = !trapped && self.follow(agent, &meter);
-        let expansions = self.expand_for(&meter);
-        // The path may only now lead somewhere (the goal joined in this call, or rewiring
-        // cleared the first edge): try once more rather than hold the agent for a call.
+        // The path may only now lead somewhere. When the goal joins in this call the agent
+        // follows at once, within the budget (`expand_for`): after the deadline, a re-rooting
+        // (O(N), milliseconds on a Cortex-M4F) made the join's call overrun (issue 25). When
+        // rewiring changed or cleared the first edge (or the search is stuck), once more after
+        // the loop, rather than hold the agent for a call.
+        let follow = (!advanced && !trapped).then_some(agent);
+        let expansions = self.expand_for(&meter, follow, &mut advanced);
         if !advanced && !trapped {
             advanced = self.follow(agent, &meter);
         }
@@ -528,7 +532,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
         self.call = Deadline::after(clock, self.cfg.t_exp);
         let meter = self.meter(clock);
-        let expansions = self.expand_for(&meter);
+        let expansions = self.expand_for(&meter, None, &mut false);
         self.progress(None, expansions, false, &meter)
     }
 
@@ -541,14 +545,29 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             .paced(self.cfg.clock_every_max, self.call.start())
     }
 
-    /// Expansions until the call's deadline (set by the caller) or the expansion cap.
-    fn expand_for<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>) -> u32 {
+    /// Expansions until the call's deadline (set by the caller) or the expansion cap. With
+    /// `follow` (the agent, not yet advanced in this call), the agent follows the path as soon
+    /// as the goal joins the forward tree; `advanced` tells whether it did.
+    fn expand_for<C: Clock + ?Sized>(
+        &mut self,
+        meter: &Meter<'_, C>,
+        follow: Option<Point>,
+        advanced: &mut bool,
+    ) -> u32 {
         let call = self.call;
         let mut expansions = 0;
         self.full = false;
         while expansions < self.cfg.max_expansions_per_call && !meter.expired(&call) {
+            let joined = self.goal_node().is_some();
             self.step(meter, call);
             expansions = expansions.saturating_add(1);
+            if let Some(agent) = follow
+                && !*advanced
+                && !joined
+                && self.goal_node().is_some()
+            {
+                *advanced = self.follow(agent, meter);
+            }
         }
         expansions
     }

@@ -149,6 +149,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             .filter(|x| x.index() < self.tree.len())
             .unwrap_or(goal);
         for _ in 0..tests {
+            // Each test may move a subtree: the call's deadline is checked before each.
+            if meter.expired(&env.call) {
+                break;
+            }
             meter.charge(1);
             let grand = self
                 .tree
@@ -203,8 +207,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             };
             self.nearby(self.pos(center), radius, &mut near, meter);
             for &x_near in near.iter() {
-                meter.charge(1);
-                self.try_rewire(env, x_near, x1, meter);
+                // A visit is up to 64 tests (a millisecond on a Cortex-M4F, issue 25): past
+                // the deadline the rest are skipped, the neighbours still queued.
+                if !meter.expired(&slice.deadline) {
+                    meter.charge(1);
+                    self.try_rewire(env, x_near, x1, meter);
+                }
                 // Seen only once queued: a node refused by the full (bounded) queue can still
                 // be queued later in the sweep, from another neighbour.
                 if !self.tree.marked(x_near, Mark::Root)
@@ -234,6 +242,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             };
             self.nearby(self.pos(x), radius, &mut near, meter);
             for &x_near in near.iter() {
+                if meter.expired(&slice.deadline) {
+                    break;
+                }
                 meter.charge(1);
                 if self.try_rewire(env, x, x_near, meter) {
                     let _ = self.goal_queue.push_back(x_near);
@@ -306,7 +317,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             // Decreasing d_A(., goal): the neighbour nearest the goal ends on top of the stack.
             let mut keyed: heapless::Vec<(f32, NodeId), { crate::search::NEAR_CAP }> =
                 heapless::Vec::new();
+            // A visit is up to 64 metric readings and 128 tests (a millisecond on a Cortex-M4F,
+            // issue 25): past the deadline the rest are skipped; a neighbour left out stays
+            // unseen, so a later visit can still take it into the sweep.
             for &id in near.iter() {
+                if meter.expired(&slice.deadline) {
+                    break;
+                }
                 let _ = keyed.push((env.metric_to(self.pos(id), &to_goal, meter), id));
             }
             sort_small_by(&mut keyed, |a, b| b.0.total_cmp(&a.0));
@@ -321,6 +338,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 (None, x1_pos)
             };
             for &(_, x_near) in keyed.iter() {
+                if meter.expired(&slice.deadline) {
+                    break;
+                }
                 meter.charge(1);
                 if printed_cost && !env.free(seen_from, self.pos(x_near), meter) {
                     continue;
@@ -426,6 +446,41 @@ mod tests {
         pack_grid(bits, 20, 20, |_, _| false).unwrap();
         let map = Map::new(OccupancyGrid::new(bits, 20, 20, 1.0).unwrap());
         (map, Config::bi_am_rrt(crate::MetricKind::Euclidean))
+    }
+
+    /// Issue 25, second round: a rewiring visit tested all its (up to 64) neighbours once
+    /// started, a millisecond on a Cortex-M4F, and the tuned set's calls ran that far past
+    /// their deadline. x1 hangs below a detour (root - a - b - x1, cost 15) with the root
+    /// 3 m away: a visit with time left rewires it below the root; a visit whose deadline
+    /// passes while it gathers the neighbours (1 ms a unit of work) tests none of them.
+    #[test]
+    fn regression_a_rewiring_visit_stops_testing_at_the_deadline() {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        let (map, cfg) = open_map(&mut bits);
+        let env = euclidean_env(&map, &cfg);
+        for (deadline, parent) in [
+            (Deadline::NEVER, 0u16),
+            (Deadline::from_ticks(0, 1_000_000), 2),
+        ] {
+            let clock = FakeClock::nanos().with_work_cost(1_000_000);
+            let meter = Meter::new(&clock);
+            let mut store = TreeStore::<64, 16>::new();
+            assert!(store.index.reshape(20.0, 20.0, 8.0));
+            let x1 = zigzag(
+                &mut store,
+                &[(2.0, 2.0), (2.0, 8.0), (5.0, 8.0), (5.0, 2.0)].map(|(x, y)| Point::new(x, y)),
+            );
+            store.tree.mark(NodeId(0), Mark::Root);
+            store.tree.mark(x1, Mark::Root);
+            store.root_queue.push_back(x1).unwrap();
+            let slice = Slice {
+                deadline,
+                visits: 1,
+            };
+            store.rewire_root(&env, slice, false, &meter);
+            store.tree.validate().unwrap();
+            assert_eq!(store.tree.parent(x1), Some(NodeId(parent)), "{deadline:?}");
+        }
     }
 
     #[test]

@@ -586,6 +586,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             )?,
         };
         meter.charge(4);
+        // Between the parts of a step, the call's deadline (issue 25: sampling, nearest,
+        // steering and the neighbourhood together ran 1 ms without a look at the clock on a
+        // Cortex-M4F); a state dropped at the deadline is one a next call draws again.
+        if meter.expired(&env.call) {
+            return None;
+        }
         // Longer steps while this tree's goal is not in it (tuned configurations).
         let searching = target.as_deref().is_some_and(|t| t.node.is_none());
         let step = if searching {
@@ -595,6 +601,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         };
         let (x_nearest, step_free) =
             self.nearest_for_step(env, x_rand, cfg.nearest_step.then_some(step), meter)?;
+        if meter.expired(&env.call) {
+            return None;
+        }
         let x_new = self.steer(
             env,
             rng,
@@ -604,6 +613,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             step_free && cfg.reuse_tests,
             meter,
         )?;
+        if meter.expired(&env.call) {
+            return None;
+        }
         let is_goal = target
             .as_deref()
             .is_some_and(|t| t.node.is_none() && t.pos == x_new);
@@ -616,6 +628,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let radius = env.radius(self.tree.len());
         let mut near = Near::new();
         let found = self.nearby(x_new, radius, &mut near, meter);
+        if meter.expired(&env.call) {
+            return None;
+        }
         let far_sample = self.pos(x_nearest).dist(x_rand) > cfg.e_max;
         // Denser where a node can still shorten the path (tuned configurations).
         let informed = view
@@ -694,6 +709,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // whatever node an id now names, so that is at worst a wasted test.
         if cfg.rewire_new && informed {
             for &nb in near.iter() {
+                if meter.expired(&env.call) {
+                    break;
+                }
                 meter.charge(1);
                 self.try_rewire(env, id, nb, meter);
             }
@@ -995,12 +1013,30 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         seen: Option<NodeId>,
         meter: &Meter<'_, C>,
     ) -> Option<NodeId> {
-        let key = |id: NodeId| self.cost(id).extend(self.pos(id).dist(x), false);
-        sort_small_by(candidates, |&a, &b| key(a).cmp(&key(b)));
-        candidates
-            .iter()
-            .copied()
-            .find(|&id| seen == Some(id) || env.free(self.pos(id), x, meter))
+        // Each key once (a square root each), then the sort: computed inside the comparisons,
+        // the keys cost about 2,000 software square roots per call of this function on a
+        // Cortex-M4F, 2 ms (issue 25). Same keys, same stable sort: the same order.
+        let mut keyed: heapless::Vec<(Cost, NodeId), NEAR_CAP> = heapless::Vec::new();
+        for &id in candidates.iter() {
+            // As many as `candidates` hold: never refused.
+            let _ = keyed.push((self.cost(id).extend(self.pos(id).dist(x), false), id));
+        }
+        sort_small_by(&mut keyed, |a, b| a.0.cmp(&b.0));
+        for (slot, &(_, id)) in candidates.iter_mut().zip(keyed.iter()) {
+            *slot = id;
+        }
+        // Up to 64 segment tests: the call's deadline is checked before each (issue 25: on a
+        // Cortex-M4F the tuned set's long steps made this loop run 3 ms past it). A deadline
+        // passed drops the state, as a blocked neighbourhood does.
+        candidates.iter().copied().find_map(|id| {
+            if seen == Some(id) {
+                return Some(Some(id));
+            }
+            if meter.expired(&env.call) {
+                return Some(None);
+            }
+            env.free(self.pos(id), x, meter).then_some(Some(id))
+        })?
     }
 }
 
@@ -1193,6 +1229,57 @@ mod tests {
 
     /// Issue 8: an expansion in progress was not checked against the call's deadline; the
     /// metric nearest scan alone read all 2,048 nodes (about 2 ms on the chip) after it.
+    /// Issue 25, second round: the parent choice tested up to 64 segments (and sorted its
+    /// candidates with two square roots per comparison) without looking at the call's
+    /// deadline, 2-3 ms past it on a Cortex-M4F with the tuned set's long steps. Candidates
+    /// that a wall hides from the new state, one that sees it last: with time left it is
+    /// found; past the deadline no segment is tested and the state is dropped.
+    #[test]
+    fn regression_parent_choice_stops_at_the_call_deadline() {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        pack_grid(&mut bits, 20, 20, |c, r| c == 10 && r < 19).unwrap();
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
+        let mut store = TreeStore::<128, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        store.reset(Point::new(0.5, 0.5));
+        let mut near = Near::new();
+        for i in 1..40u16 {
+            let p = Point::new(0.5 + (i % 8) as f32, 0.5 + (i / 8) as f32);
+            near.push(store.insert(p, NodeId(0), false).unwrap())
+                .unwrap();
+        }
+        // Above the wall's end: sees the new state, and costs the most (the farthest).
+        let last = store
+            .insert(Point::new(9.5, 19.5), NodeId(0), false)
+            .unwrap();
+        near.push(last).unwrap();
+        let x = Point::new(12.5, 19.5);
+        let cfg = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+        let clock = FakeClock::new(1_000_000_000);
+        for (call, parent) in [
+            (Deadline::NEVER, Some(last)),
+            (Deadline::from_ticks(0, 0), None),
+        ] {
+            let meter = Meter::new(&clock);
+            let env = Env {
+                map: &map,
+                metric: &crate::metric::Euclidean,
+                cfg: &cfg,
+                call,
+            };
+            let mut candidates = near.clone();
+            assert_eq!(
+                store.best_parent(&env, x, &mut candidates, None, &meter),
+                parent
+            );
+            if parent.is_none() {
+                assert_eq!(meter.work(), 0, "no segment tested past the deadline");
+            } else {
+                assert!(meter.work() > 40, "every candidate tested");
+            }
+        }
+    }
+
     #[test]
     fn regression_metric_nearest_scan_stops_at_the_deadline() {
         // A wall at column 10 hides the query point from every node.
