@@ -16,8 +16,10 @@
 //! about 1.1-1.5 cycles per instruction, `docs/board.md`).
 #![no_std]
 
+use bi_am_rrt::cortex::SysTickClock;
 use bi_am_rrt::{Config, DiffusionTable, Map, MetricKind, OccupancyGrid, Planner, Point, Storage};
 use embassy_stm32::time::Hertz;
+use embassy_stm32::wdg::IndependentWatchdog;
 use rand_xorshift::XorShiftRng;
 
 /// The scenario last exported by `host-sim export` to `BIAMRRT_FLASH_DIR` (grid and table as
@@ -79,6 +81,22 @@ pub fn init() -> embassy_stm32::Peripherals {
         w.set_dcen(true);
     });
     p
+}
+
+/// The board as both examples start it: the chip at 168 MHz ([`init`]), the independent
+/// watchdog unleashed ([`WATCHDOG_US`]: feed it after every call) and the planner's clock on
+/// SysTick (route the `SysTick` exception to `bi_am_rrt::cortex::on_systick_wrap`). Run once.
+pub fn bring_up() -> (
+    IndependentWatchdog<'static, embassy_stm32::peripherals::IWDG>,
+    SysTickClock,
+) {
+    let p = init();
+    let mut dog = IndependentWatchdog::new(p.IWDG, WATCHDOG_US);
+    dog.unleash();
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        defmt::panic!("core peripherals taken twice");
+    };
+    (dog, SysTickClock::start(cp.SYST, CORE_HZ))
 }
 
 /// What can stop the planner from starting.

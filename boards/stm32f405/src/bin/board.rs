@@ -16,13 +16,12 @@
 
 use bi_am_rrt::agent::{Protocol, run_to_goal};
 use bi_am_rrt::clock::Clock;
-use bi_am_rrt::cortex::{SysTickClock, on_systick_wrap};
+use bi_am_rrt::cortex::on_systick_wrap;
 use cortex_m_rt::{entry, exception};
 use defmt_rtt as _;
-use embassy_stm32::wdg::IndependentWatchdog;
 use panic_probe as _;
 use static_cell::ConstStaticCell;
-use stm32f405_board::{BoardStorage, CORE_HZ, CallTimes, WATCHDOG_US, goals, planner};
+use stm32f405_board::{BoardStorage, CORE_HZ, CallTimes, goals, planner};
 
 static STORAGE: ConstStaticCell<BoardStorage> = ConstStaticCell::new(BoardStorage::new());
 static TIMES: ConstStaticCell<CallTimes<600>> = ConstStaticCell::new(CallTimes::new());
@@ -34,13 +33,7 @@ fn SysTick() {
 
 #[entry]
 fn main() -> ! {
-    let p = stm32f405_board::init();
-    let mut dog = IndependentWatchdog::new(p.IWDG, WATCHDOG_US);
-    dog.unleash();
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        defmt::panic!("core peripherals taken twice");
-    };
-    let clock = SysTickClock::start(cp.SYST, CORE_HZ);
+    let (mut dog, clock) = stm32f405_board::bring_up();
     let tuned = option_env!("BIAMRRT_TUNED").is_some();
     let mut planner = match planner(STORAGE.take(), tuned) {
         Ok(planner) => planner,

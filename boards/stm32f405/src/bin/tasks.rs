@@ -50,7 +50,7 @@ use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use static_cell::ConstStaticCell;
 use stm32f405_board::{
-    BoardPlanner, BoardStorage, CORE_HZ, CallTimes, WATCHDOG_US, goals, planner, scenario, start,
+    BoardPlanner, BoardStorage, CORE_HZ, CallTimes, goals, planner, scenario, start,
 };
 
 /// The control loop's period.
@@ -93,13 +93,7 @@ fn SysTick() {
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let p = stm32f405_board::init();
-    let mut dog = IndependentWatchdog::new(p.IWDG, WATCHDOG_US);
-    dog.unleash();
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        defmt::panic!("core peripherals taken twice");
-    };
-    let clock = SysTickClock::start(cp.SYST, CORE_HZ);
+    let (dog, clock) = stm32f405_board::bring_up();
     let planner = match planner(STORAGE.take(), option_env!("BIAMRRT_TUNED").is_some()) {
         Ok(planner) => planner,
         Err(e) => defmt::panic!("planner: {}", e),
