@@ -151,11 +151,12 @@ impl Deadline {
 /// measures one reading (a reading right after the caller's reading that set the call's
 /// deadline) and the clock's rate per unit of work (between consecutive readings), and lets
 /// the interval move between [`MIN_PACED`] and `most` units (from `every`, until a rate is
-/// measured) so that a reading costs about 1/[`PACE`] of the work between two, but never past the units that took 1/[`GAP_PER_SECOND`] of a second at the slowest
-/// rate it has measured (units differ in cost: on a Cortex-M4F a unit of one phase of a step
-/// takes five times one of another, issue 25). A CPU-time clock (a system call) is then read
-/// every few thousand units, a cycle counter every few dozen; a virtual clock, whose readings
-/// cost nothing, still every `every`.
+/// measured) so that a reading costs about 1/[`PACE`] of the work between two, but never past
+/// the units that took 1/[`GAP_PER_SECOND`] of a second at the slowest rate it has measured
+/// (units differ in cost: on a Cortex-M4F a unit of one phase of a step takes five times one
+/// of another, issue 25). A CPU-time clock (a system call) is then read every few thousand
+/// units, a cycle counter every few dozen; a virtual clock, whose readings cost nothing, still
+/// every `every`.
 #[derive(Debug)]
 pub struct Meter<'c, C: Clock + ?Sized> {
     clock: &'c C,

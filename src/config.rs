@@ -200,8 +200,8 @@ pub struct Config {
     /// ([`crate::clock::Meter::paced`]), at most this many work units apart (and never more
     /// than 0.25 ms of work at the slowest rate measured), so that a reading costs under 1 %
     /// of the work between two; `clock_every` apart while a reading's cost is not measurable
-    /// (a virtual clock), down to [`crate::clock::MIN_PACED`] for a cycle counter. 0 (or at most `clock_every`): every
-    /// `clock_every` units (the paper).
+    /// (a virtual clock), down to [`crate::clock::MIN_PACED`] for a cycle counter. 0 (or at
+    /// most `clock_every`): every `clock_every` units (the paper).
     pub clock_every_max: u32,
     /// Density limit for new states inside the informed ellipse once the goal is in the tree
     /// (where a node can still shorten the path); 0 = `n_max` everywhere (the paper).
