@@ -176,6 +176,22 @@ pub struct Meter<'c, C: Clock + ?Sized> {
     last: Cell<Option<(u64, u64)>>,
     /// The slowest rate measured between two readings, in ticks per [`RATE_UNITS`] units.
     slowest: Cell<u64>,
+    /// The reading that opens the current rate window (at least [`RATE_UNITS`] units long):
+    /// how every meter, paced or not, measures its slowest rate.
+    window: Cell<Option<(u64, u64)>>,
+    /// The slowest rate over those windows, in ticks per [`RATE_UNITS`] units: what
+    /// [`Meter::affords`] predicts with (the pacing's rate, over windows as short as
+    /// [`MIN_PACED`] units, also counts the cost of readings and of phases that charge little).
+    steady: Cell<u64>,
+    /// A rate measured before this meter (the caller's last call), in the same unit: used
+    /// until this meter's own windows measure a slower one.
+    prior: u64,
+    /// The slowest cost refresh timed by this meter ([`Meter::timed_refresh`]), in ticks per
+    /// [`RATE_UNITS`] nodes: a node's refresh is a square root and a few additions, far more
+    /// than an average unit on a core without an FPU (issue 25: the Cortex-M0+ build).
+    refresh: Cell<u64>,
+    /// The same, timed before this meter.
+    refresh_prior: u64,
 }
 
 /// The fewest units between two readings of a paced meter whose readings cost something
@@ -216,6 +232,11 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             cost: Cell::new(0),
             last: Cell::new(None),
             slowest: Cell::new(0),
+            window: Cell::new(None),
+            steady: Cell::new(0),
+            prior: 0,
+            refresh: Cell::new(0),
+            refresh_prior: 0,
         }
     }
 
@@ -259,7 +280,93 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             self.repace(t, used, last);
         }
         self.last.set(Some((t, used)));
+        self.measure(t, used);
         t
+    }
+
+    /// Keeps the slowest rate over windows of at least [`RATE_UNITS`] units (shorter ones
+    /// would count a reading's own cost as work).
+    fn measure(&self, t: u64, used: u64) {
+        match self.window.get() {
+            Some((t0, at)) if used.saturating_sub(at) >= RATE_UNITS => {
+                let (dt, du) = (t.saturating_sub(t0), used.saturating_sub(at));
+                let rate = dt.saturating_mul(RATE_UNITS).checked_div(du).unwrap_or(0);
+                self.steady.set(self.steady.get().max(rate));
+                self.window.set(Some((t, used)));
+            }
+            Some(_) => {}
+            None => self.window.set(Some((t, used))),
+        }
+    }
+
+    /// With the rates of an earlier meter on the same clock ([`Meter::rates`]) as what
+    /// [`Meter::affords`] predicts with until this meter measures slower ones: a call's first
+    /// milliseconds have no window of their own yet.
+    pub fn expecting(mut self, (rate, refresh): (u64, u64)) -> Self {
+        self.prior = rate;
+        self.refresh_prior = refresh;
+        self
+    }
+
+    /// What this meter measured, for the next one ([`Meter::expecting`]): the slowest rate
+    /// over windows of [`RATE_UNITS`] units (ticks per [`RATE_UNITS`] units) and the slowest
+    /// timed refresh (ticks per [`RATE_UNITS`] nodes); 0 for what it did not measure.
+    pub fn rates(&self) -> (u64, u64) {
+        (self.steady.get(), self.refresh.get())
+    }
+
+    /// Times a refresh of `nodes` nodes' costs that started at the reading `since` (taken
+    /// with [`Meter::now`]). Refreshes of fewer than 64 nodes are not timed (too short to
+    /// tell a rate).
+    pub fn timed_refresh(&self, nodes: usize, since: u64) {
+        let nodes = nodes as u64;
+        if nodes < 64 {
+            return;
+        }
+        let dt = self.now().saturating_sub(since);
+        let rate = dt.saturating_mul(RATE_UNITS).checked_div(nodes).unwrap_or(0);
+        self.refresh.set(self.refresh.get().max(rate));
+    }
+
+    /// Ticks per [`RATE_UNITS`] nodes refreshed: the slower of the refreshes timed and the
+    /// slowest work rate (a node charged one unit), from this meter or the one before it.
+    fn per_node(&self) -> u64 {
+        let timed = self.refresh.get().max(self.refresh_prior);
+        let work = self.steady.get().max(self.prior);
+        timed.max(work)
+    }
+
+    /// `deadline` brought forward by the time refreshing `nodes` nodes takes (see
+    /// [`Meter::affords`]), but only while that is at most half the time left (else
+    /// `deadline` as is: a short budget is not given up to a reserve).
+    pub fn reserving(&self, nodes: u64, deadline: Deadline) -> Deadline {
+        let need = nodes.saturating_mul(self.per_node()) / RATE_UNITS;
+        let left = deadline.end().saturating_sub(self.check_now());
+        if need.saturating_mul(2) > left {
+            return deadline;
+        }
+        Deadline::from_ticks(
+            deadline.start(),
+            deadline
+                .end()
+                .saturating_sub(deadline.start())
+                .saturating_sub(need),
+        )
+    }
+
+    /// Whether refreshing `nodes` nodes' costs, started now, would end before `deadline`, at
+    /// the slowest rate measured ([`Meter::timed_refresh`], or a unit of work per node when
+    /// slower); false once the deadline has passed or the work cap is reached. Work that
+    /// cannot stop half-way checks this first: re-rooting a tree or moving a subtree
+    /// refreshes the cost of every node it carries, milliseconds for a whole tree on a
+    /// Cortex-M4F (issue 25). Before any rate is measured (a clock that has not moved, or
+    /// too little work), only the deadline counts.
+    pub fn affords(&self, nodes: u64, deadline: &Deadline) -> bool {
+        if self.expired(deadline) {
+            return false;
+        }
+        let need = nodes.saturating_mul(self.per_node()) / RATE_UNITS;
+        self.check_now().saturating_add(need) < deadline.end()
     }
 
     /// Pacing (type docs): sets the interval from the clock's rate between the last two
@@ -644,6 +751,42 @@ mod tests {
         let gaps: heapless::Vec<u64, 8192> = cheap.windows(2).map(|w| w[1] - w[0]).collect();
         assert!(gaps.iter().skip(2).all(|&g| g == MIN_PACED), "{gaps:?}");
         assert!(gaps.len() > 6_000);
+    }
+
+    /// Issue 25, third round: [`Meter::affords`] predicts a refresh at the slowest rate
+    /// measured over a window of [`RATE_UNITS`] units (a unit a node), paced or not, or at
+    /// the slowest refresh timed when slower, and hands both to the next meter; before any
+    /// rate, only the deadline counts.
+    #[test]
+    fn affords_predicts_at_the_slowest_rate_measured() {
+        let c = FakeClock::nanos().with_work_cost(10);
+        let m = Meter::new(&c);
+        let d = Deadline::from_ticks(c.now(), 100_000);
+        assert!(
+            m.affords(1_000_000, &d),
+            "no rate yet: only the deadline counts"
+        );
+        for _ in 0..4 {
+            m.charge(RATE_UNITS as u32);
+            assert!(!m.expired(&d));
+        }
+        // 4,096 units at 10 ns: 40,960 ns gone, 59,040 left, 5,904 units' worth.
+        assert!(m.affords(5_800, &d));
+        assert!(!m.affords(6_000, &d));
+        m.charge(6_000);
+        assert!(!m.affords(0, &d), "past the deadline");
+        // A timed refresh slower than a unit per node: 64 nodes in 64 us, 1 us a node.
+        let m = Meter::new(&c).expecting(m.rates());
+        let d = Deadline::from_ticks(c.now(), 1_000_000);
+        assert!(m.affords(90_000, &d), "10 ns a node, from the last meter");
+        let since = m.now();
+        c.advance(64_000);
+        m.timed_refresh(64, since);
+        assert_eq!(m.rates().1, 1_024_000);
+        // 64 us gone, 936 left: 936 nodes' worth.
+        assert!(m.affords(900, &d) && !m.affords(1_000, &d));
+        let next = Meter::new(&c).expecting(m.rates());
+        assert!(!next.affords(1_000_000, &Deadline::from_ticks(c.now(), 1_000_000)));
     }
 
     #[test]

@@ -133,6 +133,10 @@ pub enum Wait {
     AgentInObstacle,
     /// A dynamic obstacle lies between the agent and every tree node it could go to.
     AgentBlocked,
+    /// The path changed in this call, and moving the root onto it (a re-rooting refreshes
+    /// the cost of every node: milliseconds for thousands of nodes on a microcontroller)
+    /// would have ended after the call's budget: the agent goes on at the next call.
+    OutOfTime,
 }
 
 /// What a `plan` call did and where the agent should go.
@@ -222,6 +226,12 @@ pub struct Planner<'s, 'm, M, R, const N: usize, const B: usize, const K: usize>
     full: bool,
     /// The deadline of the current call (`t_exp`).
     call: Deadline,
+    /// A step of [`Planner::follow`] was put off in this call: it would have ended after
+    /// the deadline.
+    deferred: bool,
+    /// The rates the last call measured ([`Meter::rates`]) and the clock's ticks per second
+    /// they were measured in: the next call predicts with them from its start.
+    rate: (u64, (u64, u64)),
 }
 
 impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
@@ -268,6 +278,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             rev_goal: None,
             stats: Stats::default(),
             full: false,
+            deferred: false,
+            rate: (0, (0, 0)),
             call: Deadline::NEVER,
         })
     }
@@ -461,23 +473,29 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// # Bounded work
     ///
     /// `t_exp` counts from the moment of the call: anchoring the agent (at most one O(N)
-    /// re-rooting) and following it (at most [`FOLLOW_STEPS`]) spend it first (following is
-    /// retried once after the expansions when it could not advance before them). A call stops expanding when `t_exp` has
-    /// passed on `clock`, after `max_expansions_per_call` expansions, or once
-    /// `max_work_per_call` work units are done, whichever comes first; every rewiring phase
-    /// checks the same limits before each node it visits, and the metric nearest scan every 64
-    /// nodes (with [`Config::clock_every`] set, these checks reuse the last clock reading until
-    /// that much work has been done since it, or with [`Config::clock_every_max`] up to that
-    /// much when a reading is costly, adding at most that much work to the overrun).
-    /// On a real clock a call therefore overruns `t_exp` by at most the rest of one
-    /// expansion step (plus the re-rootings of a retried follow): measured on a
-    /// Cortex-M4F model (`examples/firmware.rs`, office, 2 x 2,048 nodes, 150 ms), 474 us at
-    /// worst, median call 150.10 ms. And whatever the clock (even one that never advances) a
+    /// re-rooting) and following it (at most [`FOLLOW_STEPS`]) spend it first. A call stops
+    /// expanding when `t_exp` has passed on `clock`, after `max_expansions_per_call`
+    /// expansions, or once `max_work_per_call` work units are done, whichever comes first;
+    /// every rewiring phase checks the same limits before each node it visits, and the metric
+    /// nearest scan every 64 nodes (with [`Config::clock_every`] set, these checks reuse the
+    /// last clock reading until that much work has been done since it, or with
+    /// [`Config::clock_every_max`] up to that much when a reading is costly, adding at most
+    /// that much work to the overrun). Work that cannot stop half-way and grows with the tree
+    /// (a re-rooting, a rewire that moves a large subtree: each refreshes the cost of every
+    /// node it carries) starts only when it ends before the deadline at the slowest rate the
+    /// calls have measured ([`Meter::affords`]); while the agent waits at the root, the
+    /// expansions leave time for following it once the goal joins or the path changes
+    /// (retried after the loop; when it does not fit, the agent holds with
+    /// [`Wait::OutOfTime`]). On a real clock a call therefore overruns `t_exp` by at most the
+    /// rest of one short piece of an expansion step: measured on a Cortex-M4F model
+    /// (`scripts/firmware-sequence.sh`, office, all six goals, 2 x 2,048 nodes, 150 ms),
+    /// 0.55 ms (paper's set) and 0.66-0.96 ms (tuned) at worst. And whatever the clock (even
+    /// one that never advances) a
     /// call does at most
     /// `max_work_per_call + W_step` units, where `W_step` is the most work between two checks:
     /// one expansion or one rewiring visit. Both are `O(N + e_max / cell)`: an expansion does
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
-    /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N / 8)
+    /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N)
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
     /// parent candidates, with `connect` up to 32 steps), each `2 + 2 e / cell` units at
     /// most (`e` the longer of `e_max` and `e_search`; a meet, connect or shortcut segment at
@@ -507,22 +525,24 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // The call's budget starts now: anchoring and following the agent spend it too, and
         // they come first, so nothing but the final check runs after the last expansion.
         self.call = Deadline::after(clock, self.cfg.t_exp);
+        self.deferred = false;
         let meter = self.meter(clock);
         let trapped = self.map.obstacles().contains(agent);
         if !trapped {
             self.anchor(agent, &meter);
         }
-        let mut advanced = !trapped && self.follow(agent, &meter);
+        let mut advanced = !trapped && self.follow(agent, &meter, Deadline::NEVER);
         // The path may only now lead somewhere. When the goal joins in this call the agent
         // follows at once, within the budget (`expand_for`): after the deadline, a re-rooting
         // (O(N), milliseconds on a Cortex-M4F) made the join's call overrun (issue 25). When
         // rewiring changed or cleared the first edge (or the search is stuck), once more after
-        // the loop, rather than hold the agent for a call.
+        // the loop, in the time the loop left for it.
         let follow = (!advanced && !trapped).then_some(agent);
         let expansions = self.expand_for(&meter, follow, &mut advanced);
         if !advanced && !trapped {
-            advanced = self.follow(agent, &meter);
+            advanced = self.follow(agent, &meter, self.call);
         }
+        self.keep_rate(&meter, clock);
         Ok(self.progress(Some(agent), expansions, advanced, &meter))
     }
 
@@ -533,6 +553,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.call = Deadline::after(clock, self.cfg.t_exp);
         let meter = self.meter(clock);
         let expansions = self.expand_for(&meter, None, &mut false);
+        self.keep_rate(&meter, clock);
         self.progress(None, expansions, false, &meter)
     }
 
@@ -540,9 +561,21 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// the work cap, and the clock readings of [`Config::clock_every`] and
     /// [`Config::clock_every_max`].
     fn meter<'c, C: Clock + ?Sized>(&self, clock: &'c C) -> Meter<'c, C> {
+        let (tps, rate) = self.rate;
+        let same_clock = tps == clock.ticks_per_second();
         Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
             .reading_every(self.cfg.clock_every)
             .paced(self.cfg.clock_every_max, self.call.start())
+            .expecting(if same_clock { rate } else { (0, 0) })
+    }
+
+    /// Keeps the rate a call's meter measured for the next call (see [`Planner::meter`]).
+    fn keep_rate<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) {
+        let (tps, (rate, refresh)) = self.rate;
+        let same_clock = tps == clock.ticks_per_second();
+        let (r, f) = meter.rates();
+        let keep = |new: u64, old: u64| if new > 0 || !same_clock { new } else { old };
+        self.rate = (clock.ticks_per_second(), (keep(r, rate), keep(f, refresh)));
     }
 
     /// Expansions until the call's deadline (set by the caller) or the expansion cap. With
@@ -557,16 +590,26 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let call = self.call;
         let mut expansions = 0;
         self.full = false;
-        while expansions < self.cfg.max_expansions_per_call && !meter.expired(&call) {
+        // An agent at the root that has not moved yet may move in or after the loop (once
+        // the goal joins, or rewiring changes the first edge): the steps leave time for that
+        // (when the budget allows, `Meter::reserving`).
+        let root = self.root_position();
+        let pending = follow.is_some_and(|a| a.dist(root) <= self.cfg.e_max / 10.0);
+        let steps = if pending {
+            meter.reserving(self.reroot_units().saturating_mul(2), call)
+        } else {
+            call
+        };
+        while expansions < self.cfg.max_expansions_per_call && !meter.expired(&steps) {
             let joined = self.goal_node().is_some();
-            self.step(meter, call);
+            self.step(meter, steps);
             expansions = expansions.saturating_add(1);
             if let Some(agent) = follow
                 && !*advanced
                 && !joined
                 && self.goal_node().is_some()
             {
-                *advanced = self.follow(agent, meter);
+                *advanced = self.follow(agent, meter, call);
             }
         }
         expansions
@@ -601,6 +644,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             Some(g) if !self.metric.distance(at, g.pos).is_finite() => Status::Unreachable,
             Some(_) if goal_node.is_none() => Status::Searching,
             Some(_) if goal_cost.is_some_and(|c| c.blocked) => Status::Waiting(Wait::PathBlocked),
+            Some(_) if self.deferred && agent == Some(root) => Status::Waiting(Wait::OutOfTime),
             Some(_) => Status::Following,
         };
         Progress {
@@ -697,7 +741,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// Re-roots at the path's next node when the agent has reached the root; with
     /// [`Config::root_step`], on past nodes the agent already stands on (a short edge would
     /// hold it for a call), at most [`FOLLOW_STEPS`] nodes per call.
-    fn follow<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) -> bool {
+    ///
+    /// A step starts only when it ends before `by` ([`Meter::affords`]): the call's deadline
+    /// once the call has expanded, never at its start, where following is the progress every
+    /// call makes (a `t_exp` shorter than a re-rooting then overruns by one).
+    fn follow<C: Clock + ?Sized>(
+        &mut self,
+        agent: Point,
+        meter: &Meter<'_, C>,
+        by: Deadline,
+    ) -> bool {
         let steps = if self.cfg.root_step > 0.0 {
             FOLLOW_STEPS
         } else {
@@ -705,7 +758,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         };
         let mut advanced = false;
         for _ in 0..steps {
-            if !self.follow_once(agent, meter) {
+            if !self.follow_once(agent, meter, by) {
                 break;
             }
             advanced = true;
@@ -714,7 +767,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// One step of [`Planner::follow`].
-    fn follow_once<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) -> bool {
+    fn follow_once<C: Clock + ?Sized>(
+        &mut self,
+        agent: Point,
+        meter: &Meter<'_, C>,
+        by: Deadline,
+    ) -> bool {
         let root = self.root_position();
         if agent.dist(root) > self.cfg.e_max / 10.0 {
             return false;
@@ -747,6 +805,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if tree.parent(next) != tree.root() || tree.edge_blocked(next) != Some(false) {
             return false;
         }
+        // A re-rooting refreshes every cost in the tree (with a long first edge split first,
+        // a subtree move): it starts only when it ends before `by`.
+        if !meter.affords(self.reroot_units(), &by) {
+            self.deferred = true;
+            return false;
+        }
         // With path shortcuts (tuned), the root is offered as parent to the node after
         // `next` first: the agent is about to commit to the path's first edge, which the
         // anytime shortcuts may not have reached yet (a goal that joins in a call leaves its
@@ -761,12 +825,20 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.free_path(agent, self.fwd.pos(next)) {
             return false;
         }
-        meter.charge(units(N / 8));
+        meter.charge(units(self.fwd.tree.len()));
+        let since = meter.now();
         if self.fwd.tree.set_root(next).is_err() {
             return false;
         }
+        meter.timed_refresh(self.fwd.tree.len(), since);
         self.fwd.restart_sweeps();
         true
+    }
+
+    /// The nodes a step of [`Planner::follow`] refreshes at most: a re-rooting refreshes every
+    /// node's cost, and a long first edge's split moves a subtree first.
+    fn reroot_units(&self) -> u64 {
+        (self.fwd.tree.len() as u64).saturating_mul(2)
     }
 
     /// Makes `node` a child of the root when the segment is free and that shortens its path
@@ -851,7 +923,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             map: &self.map,
             metric: &self.metric,
             cfg: &self.cfg,
-            call: self.call,
+            call,
         };
         let grown = self
             .fwd
@@ -871,7 +943,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             map: &self.map,
             metric: &self.metric,
             cfg: &self.cfg,
-            call: self.call,
+            call,
         };
         let searching = self.goal.is_some_and(|g| g.node.is_none());
         if self.cfg.rewire_while_searching || !searching {
@@ -915,7 +987,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                     map: &self.map,
                     metric: &self.metric,
                     cfg: &self.cfg,
-                    call: self.call,
+                    call,
                 };
                 let slice = self.slice(meter, self.cfg.t_root, call);
                 self.rev
@@ -1017,7 +1089,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 seen = seen.saturating_add(1);
                 let c_other = other.cost(id);
                 let total = Cost {
-                    length: c_new.length + libm::sqrtf(d2) + c_other.length,
+                    length: c_new.length + crate::geometry::sqrt(d2) + c_other.length,
                     blocked: c_new.blocked || c_other.blocked,
                 };
                 let at = best.partition_point(|(c, _)| *c <= total);

@@ -118,7 +118,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             None => pp.dist(pc),
         };
         let new = self.cost(parent).extend(length, false);
-        if new >= self.cost(child) || !(known_free || env.free(pp, pc, meter)) {
+        if new >= self.cost(child)
+            || !env.affords_move(&self.tree, child, meter)
+            || !(known_free || env.free(pp, pc, meter))
+        {
             return false;
         }
         // The edge change refreshes the moved subtree's costs: charge its size too.

@@ -259,6 +259,26 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
         self.map.free_path(a, b)
     }
 
+    /// Whether a subtree move below `top` (which refreshes the cost of every node it carries)
+    /// ends before the call's deadline ([`Meter::affords`]). The subtree is counted only
+    /// when the whole tree would not fit in the time left.
+    pub fn affords_move<C: Clock + ?Sized, const N: usize>(
+        &self,
+        tree: &Tree<N>,
+        top: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> bool {
+        if meter.expired(&self.call) {
+            return false;
+        }
+        if meter.affords(tree.len() as u64, &self.call) {
+            return true;
+        }
+        let carried = tree.subtree_len(top, tree.len());
+        meter.charge(units(carried / 8));
+        meter.affords(carried as u64, &self.call)
+    }
+
     /// Squared distance under which two states are the same ([`DUPLICATE`] of a cell).
     pub fn duplicate_sq(&self) -> f32 {
         duplicate_sq(self.map.grid().cell_size())
@@ -285,7 +305,7 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
             Base::AmRrt => e,
             Base::RtRrt => {
                 let area = self.map.grid().width_m() * self.map.grid().height_m();
-                let r = libm::sqrtf(
+                let r = crate::geometry::sqrt(
                     area * self.cfg.n_max as f32 / (core::f32::consts::PI * nodes.max(1) as f32),
                 );
                 r.max(e)
@@ -646,7 +666,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // A starving search (liveness): a state in a hole of the cover the rule aims at (no
         // node within `e_max / sqrt(n_max)`, the spacing of `n_max` nodes spread over an
         // `e_max` disc) is let in, so no region whose way out is narrow stays closed.
-        let spacing = cfg.e_max / libm::sqrtf(f32::from(n_max.max(1)));
+        let spacing = cfg.e_max / crate::geometry::sqrt(f32::from(n_max.max(1)));
         let hole = searching && self.refused >= STARVING && nearest_sq > spacing * spacing;
         let room = found < n_max as usize || far_sample || is_goal || exempt;
         let by_hole = hole && !room;
@@ -1016,10 +1036,11 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // Each key once (a square root each), then the sort: computed inside the comparisons,
         // the keys cost about 2,000 software square roots per call of this function on a
         // Cortex-M4F, 2 ms (issue 25). Same keys, same stable sort: the same order.
-        let mut keyed: heapless::Vec<(Cost, NodeId), NEAR_CAP> = heapless::Vec::new();
+        let mut keyed: heapless::Vec<(u64, NodeId), NEAR_CAP> = heapless::Vec::new();
         for &id in candidates.iter() {
+            let key = self.cost(id).extend(self.pos(id).dist(x), false).sort_key();
             // As many as `candidates` hold: never refused.
-            let _ = keyed.push((self.cost(id).extend(self.pos(id).dist(x), false), id));
+            let _ = keyed.push((key, id));
         }
         sort_small_by(&mut keyed, |a, b| a.0.cmp(&b.0));
         for (slot, &(_, id)) in candidates.iter_mut().zip(keyed.iter()) {

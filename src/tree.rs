@@ -73,6 +73,23 @@ impl Ord for Cost {
     }
 }
 
+impl Cost {
+    /// An integer with the order of [`Cost`]'s `cmp` (blocked last, then `total_cmp` of the
+    /// length): sorting by it compares integers instead of floats and flags (issue 25: the
+    /// parent choice's sort of 64 candidates took 0.3 ms on a Cortex-M4F).
+    pub fn sort_key(&self) -> u64 {
+        let bits = self.length.to_bits();
+        // `total_cmp`'s order as unsigned integers: negative lengths flipped entirely,
+        // positive ones with the sign bit set.
+        let ordered = if bits & 0x8000_0000 != 0 {
+            !bits
+        } else {
+            bits | 0x8000_0000
+        };
+        (u64::from(self.blocked) << 32) | u64::from(ordered)
+    }
+}
+
 impl PartialOrd for Cost {
     fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
         Some(self.cmp(o))
@@ -690,6 +707,23 @@ impl<const N: usize> Tree<N> {
         self.set_flag(v, PATH_BLOCKED, c.blocked);
     }
 
+    /// The size of `top`'s subtree, counted up to `limit` (a walk of the links, no cost
+    /// computed: a fraction of what refreshing the subtree's costs takes). 0 for an unknown
+    /// node.
+    pub fn subtree_len(&self, top: NodeId, limit: usize) -> usize {
+        if !self.contains(top) {
+            return 0;
+        }
+        let mut v = top.0;
+        for done in 1..limit.min(self.len as usize) {
+            match self.next_preorder(v, top.0) {
+                Some(next) => v = next,
+                None => return done,
+            }
+        }
+        limit.min(self.len as usize)
+    }
+
     /// Recomputes the costs of `top`'s whole subtree in preorder (parents before children),
     /// walking the intrusive links: no stack, O(subtree size). Returns the subtree's size.
     fn refresh_subtree(&mut self, top: u16) -> usize {
@@ -790,6 +824,10 @@ mod tests {
         t.set_root(b).unwrap();
         t.validate().unwrap();
         assert_eq!(t.root(), Some(b));
+        assert_eq!(t.subtree_len(b, 100), t.len());
+        assert_eq!(t.subtree_len(b, 2), 2);
+        assert_eq!(t.subtree_len(c, 100), 3, "c carries r and a");
+        assert_eq!(t.subtree_len(a, 100), 1);
         assert_eq!(t.parent(c), Some(b));
         assert_eq!(t.parent(r), Some(c));
         assert_eq!(t.edge_blocked(c), Some(true), "the c-b edge keeps its flag");
@@ -806,6 +844,35 @@ mod tests {
         assert_eq!(&buf[..n], &[b, c, r, a]);
         let mut small = [Point::ZERO; 2];
         assert_eq!(t.path_points(a, &mut small), Err(TreeError::BufferTooSmall));
+    }
+
+    /// `Cost::sort_key` orders as `Cost::cmp` does, on every kind of length.
+    #[test]
+    fn sort_keys_order_as_costs_do() {
+        let lengths = [
+            f32::NEG_INFINITY,
+            -3.5,
+            -0.0,
+            0.0,
+            1e-30,
+            1.0,
+            1.000_000_1,
+            7.25e9,
+            f32::INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let mut costs = heapless::Vec::<Cost, 32>::new();
+        for blocked in [false, true] {
+            for &length in &lengths {
+                costs.push(Cost { length, blocked }).unwrap();
+            }
+        }
+        for a in &costs {
+            for b in &costs {
+                assert_eq!(a.sort_key().cmp(&b.sort_key()), a.cmp(b), "{a:?} {b:?}");
+            }
+        }
     }
 
     #[test]

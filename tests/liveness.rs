@@ -229,3 +229,50 @@ fn joins_held_and_following<const N: usize, const B: usize>(
         }
     }
 }
+
+/// Issue 25, third round: a re-rooting after the first expansion of a call starts only when it
+/// ends before the deadline, and the loop leaves time for one while the agent waits at the
+/// root. A budget shorter than a re-rooting must still move the agent: on a clock as slow as
+/// a Cortex-M4F (1.6 us a unit), 2 ms calls (1,250 units) with 2,048-node trees (a re-rooting
+/// alone is 2,048 units) reach the goal through the maze, held or not.
+#[test]
+fn a_budget_shorter_than_a_rerooting_still_reaches_the_goal() {
+    let s = &builtin::MAZE;
+    let clock = FakeClock::nanos().with_work_cost(1_600).with_step(1);
+    for named in [
+        Config::bi_am_rrt(MetricKind::Euclidean),
+        Config::bi_am_rrt(MetricKind::Euclidean).tuned(),
+    ] {
+        let mut cfg = named.with_sigma(s.sigma);
+        cfg.t_exp = Duration::from_millis(2);
+        let mut storage = Box::new(Storage::<2048, 1024>::new());
+        let mut planner = Planner::new(
+            &mut storage,
+            Map::<K>::new(s.grid),
+            Euclidean,
+            XorShiftRng::seed_from_u64(1),
+            cfg,
+            s.start,
+        )
+        .unwrap();
+        let goal = s.goals[0];
+        planner.set_goal(goal).unwrap();
+        let mut agent = s.start;
+        let mut reached = None;
+        for call in 0..20_000u32 {
+            let p = planner.plan(&clock, agent).unwrap();
+            assert!(planner.map().free_path(agent, p.waypoint));
+            agent = agent.step_towards(p.waypoint, 0.7);
+            if p.goal_in_tree && agent == goal {
+                reached = Some(call);
+                break;
+            }
+        }
+        assert!(
+            reached.is_some(),
+            "{}: the agent ended at {agent:?}, {} nodes",
+            cfg.name(),
+            planner.tree().len()
+        );
+    }
+}

@@ -6,7 +6,7 @@ use std::collections::HashSet;
 use std::time::Duration;
 
 use bi_am_rrt::builtin::{self, Scenario};
-use bi_am_rrt::clock::FakeClock;
+use bi_am_rrt::clock::{Clock, FakeClock};
 use bi_am_rrt::error::{InputError, SetupError};
 use bi_am_rrt::map::Circle;
 use bi_am_rrt::metric::DiffusionTable;
@@ -1014,4 +1014,62 @@ fn both_search_definitions_and_both_waits() {
         from_set.calls <= from_join.calls,
         "{from_set:?} vs {from_join:?}"
     );
+}
+
+/// Issue 25, third round: a re-rooting or a rewire that moves a large subtree refreshes the
+/// cost of every node it carries (a software square root each on a Cortex-M4F: 2.6-2.8 ms
+/// for 2,048 nodes) and cannot stop half-way; started just before the deadline, it made the
+/// tuned set's calls end up to 1.8 ms late on the MCU. On a virtual clock as slow as that chip
+/// (1.6 us a unit), with full 2,048-node trees and every goal of the maze in turn, no call may
+/// end more than 1 ms after `t_exp`.
+#[test]
+fn regression_work_that_cannot_stop_starts_only_if_it_ends_before_the_deadline() {
+    let s = &builtin::MAZE;
+    let table = landmark_table(&s.grid, 8);
+    let clock = FakeClock::nanos().with_work_cost(1_600).with_step(10);
+    let proto = Protocol {
+        speed: 2.0,
+        ..Protocol::default()
+    };
+    for cfg in [
+        Config::bi_am_rrt(MetricKind::Diffusion).tuned(),
+        Config::bi_am_rrt(MetricKind::Diffusion),
+    ] {
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let mut cfg = cfg.with_sigma(s.sigma);
+        cfg.t_exp = Duration::from_millis(150);
+        let mut p = Planner::new(
+            &mut storage,
+            Map::<K>::new(s.grid),
+            DiffusionTable::new(&table).unwrap(),
+            XorShiftRng::seed_from_u64(5),
+            cfg,
+            s.start,
+        )
+        .unwrap();
+        let budget = clock.ticks(cfg.t_exp);
+        let (mut worst, mut calls, mut nodes) = (0u64, 0u32, 0);
+        for goal in s.goals.iter().cycle().take(2 * s.goals.len()) {
+            let mut last = clock.peek();
+            let r = drive(&mut p, &clock, *goal, proto, |p, _, _| {
+                let now = clock.peek();
+                worst = worst.max((now - last).saturating_sub(budget));
+                nodes = nodes.max(p.tree().len());
+                calls += 1;
+                last = now;
+            });
+            assert!(r.reached && r.collisions == 0, "{}: {r:?}", cfg.name());
+        }
+        assert!(
+            nodes >= N / 2 && calls > 100,
+            "{}: {calls} calls, {nodes} nodes",
+            cfg.name()
+        );
+        assert!(
+            worst <= 1_000_000,
+            "{}: a call ended {} us after t_exp",
+            cfg.name(),
+            worst / 1_000
+        );
+    }
 }
