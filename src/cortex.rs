@@ -5,7 +5,8 @@
 //! - [`SysTickClock`]: the core's 24-bit SysTick counting core cycles, extended to 64 bits by
 //!   counting its wraps in the SysTick exception. Every Cortex-M has it, and QEMU emulates it
 //!   (with `-icount`, deterministically), so it is the clock of the firmware example.
-//! - [`DwtClock`]: the DWT cycle counter (Cortex-M3 and up), 32 bits, extended in software
+//! - [`DwtClock`]: the DWT cycle counter (Cortex-M3 and up; not built for ARMv6-M, whose
+//!   cores have neither the counter nor atomic read-modify-write), 32 bits, extended in software
 //!   on every read. No interrupt needed; it must be read at least once per 2^32 cycles (25.6 s
 //!   at 168 MHz), which any planner call does many times over. QEMU does not emulate it (it
 //!   reads 0: the clock never advances, and the planner's work cap still ends every call).
@@ -24,11 +25,14 @@
 //! planner.plan(&clock, agent)?;
 //! ```
 
+#[cfg(target_has_atomic = "32")]
 use core::cell::Cell;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
+#[cfg(target_has_atomic = "32")]
+use cortex_m::peripheral::{DCB, DWT};
+use cortex_m::peripheral::{SCB, SYST};
 
 use crate::clock::Clock;
 
@@ -42,7 +46,17 @@ static WRAPS: AtomicU32 = AtomicU32::new(0);
 /// there is needed). Without it the clock would repeat every 2^24 cycles.
 #[inline]
 pub fn on_systick_wrap() {
+    #[cfg(target_has_atomic = "32")]
     WRAPS.fetch_add(1, Ordering::AcqRel);
+    // ARMv6-M (Cortex-M0/M0+) has no atomic read-modify-write: a load and a store with
+    // interrupts off (only this handler writes the count).
+    #[cfg(not(target_has_atomic = "32"))]
+    cortex_m::interrupt::free(|_| {
+        WRAPS.store(
+            WRAPS.load(Ordering::Acquire).wrapping_add(1),
+            Ordering::Release,
+        );
+    });
 }
 
 /// A [`Clock`] on SysTick, in core cycles (see the module docs).
@@ -103,6 +117,7 @@ impl Clock for SysTickClock {
 
 /// A [`Clock`] on the DWT cycle counter, extended to 64 bits on every read (see the module
 /// docs).
+#[cfg(target_has_atomic = "32")]
 #[derive(Debug)]
 pub struct DwtClock {
     hz: u32,
@@ -110,6 +125,7 @@ pub struct DwtClock {
     high: Cell<u64>,
 }
 
+#[cfg(target_has_atomic = "32")]
 impl DwtClock {
     /// Enables tracing and the cycle counter; `core_hz` is the core clock.
     pub fn start(dcb: &mut DCB, dwt: &mut DWT, core_hz: u32) -> Self {
@@ -123,6 +139,7 @@ impl DwtClock {
     }
 }
 
+#[cfg(target_has_atomic = "32")]
 impl Clock for DwtClock {
     fn now(&self) -> u64 {
         let now = DWT::cycle_count();

@@ -15,6 +15,24 @@ use core::ops::{Add, Mul, Sub};
 
 use rand_core::Rng;
 
+/// The square root every distance goes through. IEEE 754 requires it correctly rounded, and
+/// both routes are: `libm`'s software routine (the default, stable Rust) and, with the
+/// feature `hw-sqrt` (nightly Rust: `core::f32::math` is unstable), the target's own (the
+/// Cortex-M4F's `vsqrt.f32`, 14 cycles; where a target has none, the compiler calls a
+/// software one). Same bits either way, so host and MCU still agree bit for bit
+/// (`tests/sqrt.rs` compares `libm` with the host's instruction on every exponent).
+#[inline(always)]
+pub fn sqrt(x: f32) -> f32 {
+    #[cfg(feature = "hw-sqrt")]
+    {
+        core::f32::math::sqrt(x)
+    }
+    #[cfg(not(feature = "hw-sqrt"))]
+    {
+        libm::sqrtf(x)
+    }
+}
+
 /// A point (or vector) of the plane, in metres.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -56,7 +74,7 @@ impl Point {
     /// Euclidean norm.
     #[inline]
     pub fn norm(self) -> f32 {
-        libm::sqrtf(self.norm_sq())
+        sqrt(self.norm_sq())
     }
 
     /// Squared Euclidean distance to `o`.
@@ -68,7 +86,7 @@ impl Point {
     /// Euclidean distance to `o` (`d_E` in the paper).
     #[inline]
     pub fn dist(self, o: Point) -> f32 {
-        libm::sqrtf(self.dist_sq(o))
+        sqrt(self.dist_sq(o))
     }
 
     /// The point at fraction `t` of the way from `self` to `o` (`t = 0` gives `self`).
@@ -145,7 +163,7 @@ pub fn sample_disc<R: Rng + ?Sized>(rng: &mut R, center: Point, radius: f32) -> 
 
 /// A uniform point in the unit disc (polar method with the square-root radius law).
 pub fn sample_unit_disc<R: Rng + ?Sized>(rng: &mut R) -> Point {
-    let r = libm::sqrtf(unit_f32(rng));
+    let r = sqrt(unit_f32(rng));
     let theta = unit_f32(rng) * core::f32::consts::TAU;
     // One range reduction for both: the same bits as `cosf` and `sinf` (unit test), a quarter
     // of their time.
@@ -182,7 +200,7 @@ impl DiscFan {
 
     /// The next state of the fan (its radius drawn now).
     pub fn next_state<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Point {
-        let r = libm::sqrtf(unit_f32(rng)) * self.radius;
+        let r = sqrt(unit_f32(rng)) * self.radius;
         let p = self.center + self.dir * r;
         let (d, t) = (self.dir, self.turn);
         self.dir = Point::new(d.x * t.x - d.y * t.y, d.x * t.y + d.y * t.x);
@@ -218,7 +236,7 @@ impl Ellipse {
             Point::new(1.0, 0.0)
         };
         let a = 0.5 * c_best;
-        let b = 0.5 * libm::sqrtf(c_best * c_best - c_min * c_min);
+        let b = 0.5 * sqrt(c_best * c_best - c_min * c_min);
         Some(Self {
             center: f1.lerp(f2, 0.5),
             axis,

@@ -85,6 +85,8 @@
 
 #![no_std]
 #![forbid(unsafe_code)]
+// `hw-sqrt`: the FPU's square root through `core::f32::math` (unstable: nightly Rust).
+#![cfg_attr(feature = "hw-sqrt", feature(core_float_math))]
 #![warn(missing_docs)]
 // No reachable panic (promise 2): the non-test code may not index, unwrap, panic, overflow an
 // integer or truncate in a cast. Local `allow`s carry a one-line reason; the panic-never build

@@ -699,7 +699,7 @@ impl DiffusionTable<'_> {
         // nearest scan and of goal rewiring.
         match (self.entry(ca), self.entry(cb)) {
             (Some(ea), Some(eb)) => match stored_sq(self.header.kind, ea, eb) {
-                Some(sum) => libm::sqrtf(sum) * self.header.scale,
+                Some(sum) => crate::geometry::sqrt(sum) * self.header.scale,
                 None => f32::INFINITY,
             },
             _ => f32::INFINITY,
@@ -1010,7 +1010,10 @@ mod tests {
             let n = write_table(&header(kind), &mut buf, coords).unwrap();
             let t = DiffusionTable::new(&buf[..n]).unwrap();
             let d = t.distance(Point::new(0.5, 0.5), Point::new(1.5, 1.5));
-            assert!((d - libm::sqrtf(1.0 + 4.0)).abs() < 1e-6, "{kind:?}: {d}");
+            assert!(
+                (d - crate::geometry::sqrt(1.0 + 4.0)).abs() < 1e-6,
+                "{kind:?}: {d}"
+            );
             assert_eq!(
                 t.distance(Point::new(0.5, 0.5), Point::new(2.5, 1.5)),
                 f32::INFINITY
@@ -1044,7 +1047,7 @@ mod tests {
                     };
                     sum += (x - y) * (x - y);
                 }
-                libm::sqrtf(sum) * t.header.scale
+                crate::geometry::sqrt(sum) * t.header.scale
             };
             for i in 0..64 {
                 for j in 0..64 {
