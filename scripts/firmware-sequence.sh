@@ -1,29 +1,61 @@
 #!/usr/bin/env bash
 # The whole office sequence on the firmware under QEMU (issue 25): all six goals in turn,
 # with the paper's set and with the tuned one, on the SysTick clock at 168 MHz (QEMU's
-# -icount model: 8 ns an instruction). About 4 minutes of QEMU per set. Writes
-# docs/firmware-sequence.txt (the README quotes it); `.ci/run` runs it with FIRMWARE_SEQUENCE=1.
+# -icount model: 8 ns an instruction). About 1-4 minutes of QEMU per set.
+#
+#   scripts/firmware-sequence.sh [--check] [--hw-sqrt | --m0]
+#
+# Writes docs/firmware-sequence.txt (the README quotes it); with --hw-sqrt (nightly Rust, the
+# FPU's square root: feature `hw-sqrt`) docs/firmware-sequence-hw-sqrt.txt; with --m0 the
+# Cortex-M0+ build (tests/m0-twin's `office`: soft float, SysTick at 25 MHz on QEMU's
+# mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt. --check compares
+# instead of writing. `.ci/run` runs all three with FIRMWARE_SEQUENCE=1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+check=0
+hw=0
+m0=0
+for a in "$@"; do
+  case "$a" in
+    --check) check=1 ;;
+    --hw-sqrt) hw=1 ;;
+    --m0) m0=1 ;;
+    *) echo "unknown argument $a" >&2; exit 2 ;;
+  esac
+done
 cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
   --scenario office --out target/flash >/dev/null
 export BIAMRRT_FLASH_DIR="$PWD/target/flash" BIAMRRT_GOALS=all
-args=(--profile firmware --example firmware --target thumbv7em-none-eabihf --features firmware-example)
-out=target/firmware-sequence.txt
+args=(--profile firmware --example firmware --target thumbv7em-none-eabihf)
+cargo=(cargo)
+doc=docs/firmware-sequence.txt
+dir=.
+if [ "$hw" = 1 ]; then
+  cargo=(cargo +nightly)
+  args+=(--features firmware-example,hw-sqrt)
+  doc=docs/firmware-sequence-hw-sqrt.txt
+elif [ "$m0" = 1 ]; then
+  dir=tests/m0-twin
+  args=(--release --bin office)
+  doc=docs/firmware-sequence-m0.txt
+else
+  args+=(--features firmware-example)
+fi
+out=target/$(basename "$doc")
 : >"$out"
 for set in paper tuned; do
   if [ "$set" = tuned ]; then export BIAMRRT_TUNED=1; else unset BIAMRRT_TUNED; fi
   echo "== $set set" | tee -a "$out"
-  # The twin line is CI's business; keep the office sequence's lines.
-  if ! fw=$(timeout 1800 cargo run "${args[@]}" 2>/dev/null); then
+  if ! fw=$(cd "$dir" && timeout 1800 "${cargo[@]}" run "${args[@]}" 2>/dev/null); then
     echo "$fw"
     echo "the $set firmware failed (a goal not reached, a collision, or a panic)"
     exit 1
   fi
-  echo "$fw" | tail -n +2 | tee -a "$out"
+  # The M4F firmware's first line is the twin's (CI's business): keep the office lines.
+  if [ "$m0" = 1 ]; then echo "$fw"; else echo "$fw" | tail -n +2; fi | tee -a "$out"
 done
-if [ "${1:-}" = --check ]; then
-  diff -u docs/firmware-sequence.txt "$out"
+if [ "$check" = 1 ]; then
+  diff -u "$doc" "$out"
 else
-  cp "$out" docs/firmware-sequence.txt
+  cp "$out" "$doc"
 fi

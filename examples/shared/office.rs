@@ -1,0 +1,267 @@
+//! The exported scenario's mission in real time, shared by the firmware example
+//! (`examples/firmware.rs`, Cortex-M4F) and the Cortex-M0+ build (`tests/m0-twin`): the
+//! planner flies the scenario's goal 1 (or with `BIAMRRT_GOALS=all` at build time all its
+//! goals in turn) on the clock it is given, and prints the per-call times, the path and its
+//! checksum. The including crate provides `scenario` (the `host-sim export` statics) and
+//! `hprintln!` at its root.
+
+use bi_am_rrt::agent::{Protocol, run_to_goal};
+use bi_am_rrt::clock::Clock;
+use bi_am_rrt::metric::fnv1a32;
+use bi_am_rrt::{Config, DiffusionTable, Map, MetricKind, OccupancyGrid, Planner, Point};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+use crate::hprintln;
+use crate::mission::MissionStorage;
+use crate::scenario;
+
+/// Most `plan` calls made per goal.
+const MAX_CALLS: u32 = 600;
+
+/// Per-call times in 10 us bins from 148.00 ms: the median without keeping every call (the
+/// whole office sequence makes over a thousand), exact to 10 us when it falls in the bins.
+pub struct CallTimes {
+    bins: [u16; BINS],
+    below: u32,
+    above: u32,
+    count: u32,
+}
+
+/// Bins of [`CallTimes`], 10 us each from [`FIRST_BIN`] (148.00 ms to 153.12 ms).
+const BINS: usize = 512;
+/// The first bin, in units of 10 us.
+const FIRST_BIN: u32 = 14_800;
+
+impl CallTimes {
+    pub const fn new() -> Self {
+        Self {
+            bins: [0; BINS],
+            below: 0,
+            above: 0,
+            count: 0,
+        }
+    }
+
+    fn record(&mut self, tens_of_us: u32) {
+        self.count += 1;
+        match tens_of_us
+            .checked_sub(FIRST_BIN)
+            .map(|i| self.bins.get_mut(i as usize))
+        {
+            None => self.below += 1,
+            Some(None) => self.above += 1,
+            Some(Some(bin)) => *bin = bin.saturating_add(1),
+        }
+    }
+
+    /// The median call in units of 10 us, `None` when it falls outside the bins.
+    fn median(&self) -> Option<u32> {
+        let half = self.count / 2 + 1;
+        let mut seen = self.below;
+        if seen >= half {
+            return None;
+        }
+        for (i, &n) in self.bins.iter().enumerate() {
+            seen += u32::from(n);
+            if seen >= half {
+                return Some(FIRST_BIN + i as u32);
+            }
+        }
+        None
+    }
+}
+
+/// What the office mission flies: goal 1 from the start (CI's figures), or with
+/// `BIAMRRT_GOALS=all` at build time every goal of the scenario in turn.
+fn goals() -> &'static [(f32, f32)] {
+    let all = option_env!("BIAMRRT_GOALS").is_some_and(|g| g == "all");
+    let n = if all { scenario::GOALS.len() } else { 1 };
+    scenario::GOALS.get(..n).unwrap_or(&[])
+}
+
+/// Flies the exported scenario on `clock`, whose ticks are cycles of a `core_hz` core (the
+/// overrun and the per-call bins are printed in those). True when every goal was reached
+/// without a collision.
+pub fn exported_mission<C: Clock>(
+    storage: &mut MissionStorage,
+    times: &mut CallTimes,
+    clock: &C,
+    core_hz: u32,
+) -> bool {
+    let (Ok(grid), Ok(table)) = (
+        OccupancyGrid::new(
+            &scenario::GRID,
+            scenario::COLS,
+            scenario::ROWS,
+            scenario::CELL,
+        ),
+        DiffusionTable::new(&scenario::TABLE),
+    ) else {
+        hprintln!("scenario: bad grid or table in flash");
+        return false;
+    };
+    let map: Map<'static, 4> = Map::new(grid);
+    // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
+    // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
+    let base = Config::bi_am_rrt(MetricKind::Diffusion);
+    let base = if option_env!("BIAMRRT_TUNED").is_some() {
+        base.tuned()
+    } else {
+        base
+    };
+    let cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    let rng = XorShiftRng::seed_from_u64(1);
+    let start = Point::new(scenario::START.0, scenario::START.1);
+    let Ok(mut planner) = Planner::new(storage, map, table, rng, cfg, start) else {
+        hprintln!("scenario: planner refused its start");
+        return false;
+    };
+    let protocol = Protocol {
+        max_calls: MAX_CALLS,
+        ..Protocol::default()
+    };
+    let cycles_per_10us = u64::from(core_hz / 100_000);
+    let mut worst = 0u64;
+    let mut trail = 0x811c_9dc5u32;
+    let mut nodes = 0usize;
+    let (mut ok, mut reached, mut calls, mut travelled) = (true, 0, 0u32, 0f32);
+    let mut expansions = 0u64;
+    let mut result = None;
+    let goals = goals();
+    for (i, &(x, y)) in goals.iter().enumerate() {
+        let mut last = clock.now();
+        let run = run_to_goal(
+            &mut planner,
+            clock,
+            Point::new(x, y),
+            &protocol,
+            |p, agent, _| {
+                let now = clock.now();
+                let dt = now.saturating_sub(last);
+                worst = worst.max(dt);
+                times.record(u32::try_from(dt / cycles_per_10us).unwrap_or(u32::MAX));
+                nodes = p.tree().len();
+                // FNV-1a over the agent's positions: the path's checksum.
+                let mut bytes = [0u8; 8];
+                bytes[..4].copy_from_slice(&agent.x.to_bits().to_le_bytes());
+                bytes[4..].copy_from_slice(&agent.y.to_bits().to_le_bytes());
+                trail = bytes
+                    .iter()
+                    .fold(trail, |h, &b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
+                last = clock.now();
+            },
+        );
+        let Ok(r) = run else {
+            hprintln!("scenario: goal {} refused", i + 1);
+            return false;
+        };
+        if goals.len() > 1 {
+            hprintln!(
+                "goal {}: reached {}, path {} m, {} collisions, {} plan calls",
+                i + 1,
+                r.reached,
+                r.travelled,
+                r.collisions,
+                r.calls
+            );
+        }
+        // Counted per goal (`set_goal` starts the stats again).
+        expansions += planner.stats().expansions;
+        ok &= r.reached && r.collisions == 0;
+        reached += usize::from(r.reached);
+        calls += r.calls;
+        travelled += r.travelled;
+        result.get_or_insert(r);
+    }
+    let Some(r) = result else {
+        return false;
+    };
+    let budget = clock.ticks(cfg.t_exp);
+    let ms = u64::from(core_hz / 1_000);
+    let us = u64::from(core_hz / 1_000_000);
+    if goals.len() > 1 {
+        hprintln!(
+            "{} on {} (real clock, t_exp {} ms): {}/{} goals reached, path {} m, {} plan calls, \
+             {} expansions ({}.{} per call), {} nodes at the end",
+            cfg.name(),
+            scenario::NAME,
+            cfg.t_exp.as_millis(),
+            reached,
+            goals.len(),
+            travelled,
+            calls,
+            expansions,
+            expansions / u64::from(calls.max(1)),
+            expansions * 10 / u64::from(calls.max(1)) % 10,
+            nodes
+        );
+    } else {
+        let search_ms = r.search_ticks.map_or(0, |t| t / ms);
+        hprintln!(
+            "{} on {} (real clock, t_exp {} ms): reached {}, search {} ms, path {} m, \
+             {} collisions, {} nodes at goal, {} nodes at the end, {} plan calls",
+            cfg.name(),
+            scenario::NAME,
+            cfg.t_exp.as_millis(),
+            r.reached,
+            search_ms,
+            r.travelled,
+            r.collisions,
+            r.nodes_at_goal.unwrap_or(0),
+            nodes,
+            r.calls
+        );
+    }
+    let median = times.median();
+    hprintln!(
+        "per-call time: median {}, worst {}.{:03} ms ({} cycles, overrun {} us); path checksum {:08x}",
+        Median(median),
+        worst / ms,
+        (worst % ms) / us,
+        worst,
+        worst.saturating_sub(budget) / us,
+        trail
+    );
+    hprintln!(
+        "grid {} bytes and table {} bytes in flash (table checksum {:08x})",
+        scenario::GRID.len(),
+        scenario::TABLE.len(),
+        fnv1a32(&scenario::TABLE)
+    );
+    ok
+}
+
+/// A median of [`CallTimes`] as `150.04 ms`.
+struct Median(Option<u32>);
+
+impl core::fmt::Display for Median {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.0 {
+            Some(m) => write!(f, "{}.{:02} ms", m / 100, m % 100),
+            None => write!(f, "outside 148.00-153.12 ms"),
+        }
+    }
+}
+
+/// Bytes of stack ever used: `cortex-m-rt` (feature `paint-stack`) fills the stack with
+/// `0xCCCC_CCCC` at reset; the lowest word that no longer holds it marks the deepest use.
+pub fn stack_high_water() -> usize {
+    unsafe extern "C" {
+        static _stack_start: u32;
+        static _stack_end: u32;
+    }
+    let top = &raw const _stack_start as usize;
+    let bottom = &raw const _stack_end as usize;
+    let mut at = bottom;
+    while at < top {
+        // SAFETY: `at` is a word-aligned address inside the stack region, which is RAM that
+        // this program owns; reading it (volatile, so it is not optimised away) is harmless.
+        let word = unsafe { core::ptr::read_volatile(at as *const u32) };
+        if word != 0xCCCC_CCCC {
+            break;
+        }
+        at += 4;
+    }
+    top - at
+}
