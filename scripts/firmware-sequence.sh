@@ -3,23 +3,27 @@
 # with the paper's set and with the tuned one, on the SysTick clock at 168 MHz (QEMU's
 # -icount model: 8 ns an instruction). About 1-4 minutes of QEMU per set.
 #
-#   scripts/firmware-sequence.sh [--check] [--hw-sqrt | --m0]
+#   scripts/firmware-sequence.sh [--check] [--hw-sqrt | --m0 | --riscv]
 #
 # Writes docs/firmware-sequence.txt (the README quotes it); with --hw-sqrt (nightly Rust, the
 # FPU's square root: feature `hw-sqrt`) docs/firmware-sequence-hw-sqrt.txt; with --m0 the
 # Cortex-M0+ build (tests/m0-twin's `office`: soft float, SysTick at 25 MHz on QEMU's
-# mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt. --check compares
-# instead of writing. `.ci/run` runs all three with FIRMWARE_SEQUENCE=1.
+# mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt; with --riscv the
+# RISC-V build (tests/riscv-twin's `office`: riscv32imac, soft float, the `time` counter at
+# 10 MHz on QEMU's virt board) docs/firmware-sequence-riscv.txt. --check compares instead of
+# writing. `.ci/run` runs all four with FIRMWARE_SEQUENCE=1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 check=0
 hw=0
 m0=0
+rv=0
 for a in "$@"; do
   case "$a" in
     --check) check=1 ;;
     --hw-sqrt) hw=1 ;;
     --m0) m0=1 ;;
+    --riscv) rv=1 ;;
     *) echo "unknown argument $a" >&2; exit 2 ;;
   esac
 done
@@ -38,6 +42,10 @@ elif [ "$m0" = 1 ]; then
   dir=tests/m0-twin
   args=(--release --bin office)
   doc=docs/firmware-sequence-m0.txt
+elif [ "$rv" = 1 ]; then
+  dir=tests/riscv-twin
+  args=(--release --bin office)
+  doc=docs/firmware-sequence-riscv.txt
 else
   args+=(--features firmware-example)
 fi
@@ -52,7 +60,7 @@ for set in paper tuned; do
     exit 1
   fi
   # The M4F firmware's first line is the twin's (CI's business): keep the office lines.
-  if [ "$m0" = 1 ]; then echo "$fw"; else echo "$fw" | tail -n +2; fi | tee -a "$out"
+  if [ "$m0" = 1 ] || [ "$rv" = 1 ]; then echo "$fw"; else echo "$fw" | tail -n +2; fi | tee -a "$out"
 done
 if [ "$check" = 1 ]; then
   diff -u "$doc" "$out"

@@ -324,7 +324,10 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
             return;
         }
         let dt = self.now().saturating_sub(since);
-        let rate = dt.saturating_mul(RATE_UNITS).checked_div(nodes).unwrap_or(0);
+        let rate = dt
+            .saturating_mul(RATE_UNITS)
+            .checked_div(nodes)
+            .unwrap_or(0);
         self.refresh.set(self.refresh.get().max(rate));
     }
 

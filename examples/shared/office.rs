@@ -3,7 +3,7 @@
 //! planner flies the scenario's goal 1 (or with `BIAMRRT_GOALS=all` at build time all its
 //! goals in turn) on the clock it is given, and prints the per-call times, the path and its
 //! checksum. The including crate provides `scenario` (the `host-sim export` statics) and
-//! `hprintln!` at its root.
+//! `hprintln!` at its root. Also built for RISC-V (`tests/riscv-twin`'s `office`).
 
 use bi_am_rrt::agent::{Protocol, run_to_goal};
 use bi_am_rrt::clock::Clock;
@@ -244,8 +244,9 @@ impl core::fmt::Display for Median {
     }
 }
 
-/// Bytes of stack ever used: `cortex-m-rt` (feature `paint-stack`) fills the stack with
+/// Bytes of stack ever used (Cortex-M builds): `cortex-m-rt` (feature `paint-stack`) fills the stack with
 /// `0xCCCC_CCCC` at reset; the lowest word that no longer holds it marks the deepest use.
+#[cfg(target_arch = "arm")]
 pub fn stack_high_water() -> usize {
     unsafe extern "C" {
         static _stack_start: u32;
