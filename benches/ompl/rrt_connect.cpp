@@ -173,10 +173,23 @@ std::vector<Leg> readLegs(const std::string &path) {
 
 }  // namespace
 
+// `--cold`: evicts the caches a query could reuse before it starts (64 MiB written and read
+// back, outside the timed part), as `host-sim bench --cold` does for our planners.
+static void flushCaches() {
+    static std::vector<unsigned long long> buf((64u << 20) / 8);
+    unsigned long long sum = 0;
+    for (std::size_t i = 0; i < buf.size(); ++i) {
+        buf[i] += i;
+        sum += buf[i];
+    }
+    static volatile unsigned long long sink;
+    sink = sum;
+}
+
 int main(int argc, char **argv) {
     if (argc < 4) {
         std::cerr << "usage: rrt_connect LEGS.csv GRID_DIR SEEDS [--planner connect|informed] "
-                     "[--budgets S,S,...] [MAP=WIDTHxHEIGHT ...]\n"
+                     "[--budgets S,S,...] [MAP=WIDTHxHEIGHT ...] [--cold]\n"
                      "  GRID_DIR holds MAP.grid from `host-sim bench`; each map's size is given "
                      "as MAP=WxH\n";
         return 2;
@@ -187,12 +200,17 @@ int main(int argc, char **argv) {
     const std::string dir = argv[2];
     const int seeds = std::stoi(argv[3]);
     std::string which = "connect";
+    bool cold = false;
     std::vector<double> budgets;
     std::vector<std::pair<std::string, Grid>> grids;
     for (int i = 4; i < argc; ++i) {
         const std::string spec = argv[i];
         if (spec == "--planner" && i + 1 < argc) {
             which = argv[++i];
+            continue;
+        }
+        if (spec == "--cold") {
+            cold = true;
             continue;
         }
         if (spec == "--budgets" && i + 1 < argc) {
@@ -256,6 +274,7 @@ int main(int argc, char **argv) {
             ss.setup();  // default range: 0.2 x the space's extent
             auto pdef = ss.getProblemDefinition();
             auto planner = ss.getPlanner();
+            if (cold) flushCaches();
             const double t0 = threadCpuSeconds();
             if (!informed) {
                 const ob::PlannerStatus st =

@@ -134,6 +134,28 @@ pub struct BenchArgs {
     /// [`VIRTUAL_NS_PER_UNIT`] ns each: repeatable figures for comparing algorithmic changes,
     /// blind to how fast a unit of work runs).
     pub clock: BenchClock,
+    /// Cold queries: caches flushed before every measured query ([`flush_caches`]; the
+    /// OMPL harness does the same with `--cold`).
+    pub cold: bool,
+}
+
+/// Bytes written and read back by [`flush_caches`]: several times any last-level cache of
+/// the machines this runs on.
+const FLUSH_BYTES: usize = 64 << 20;
+
+/// Evicts the caches (and the TLB entries) a query could reuse: 64 MiB written and read
+/// back, the sum kept from the optimiser.
+pub fn flush_caches() {
+    use std::sync::OnceLock;
+    static BUF: OnceLock<std::sync::Mutex<Vec<u64>>> = OnceLock::new();
+    let buf = BUF.get_or_init(|| std::sync::Mutex::new(vec![0; FLUSH_BYTES / 8]));
+    let mut v = buf.lock().unwrap_or_else(|e| e.into_inner());
+    let mut sum = 0u64;
+    for (i, w) in v.iter_mut().enumerate() {
+        *w = w.wrapping_add(i as u64);
+        sum = sum.wrapping_add(*w);
+    }
+    std::hint::black_box(sum);
 }
 
 /// The clock of a bench ([`BenchArgs::clock`]).
@@ -263,6 +285,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                         } else {
                             &args.budgets[..]
                         },
+                        cold: args.cold,
                     };
                     let r = match args.nodes {
                         2048 => run.on(&mut arenas.n2048),
@@ -304,6 +327,11 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
     let md = summary_markdown(&summary, &args.budgets);
     std::fs::write(args.out.join("summary.md"), &md)?;
     print!("{md}");
+    if args.ompl.is_some() {
+        let ratios = ratios_markdown(&rows, &args.budgets, args.cold);
+        std::fs::write(args.out.join("ratios.md"), &ratios)?;
+        print!("\n{ratios}");
+    }
     Ok(rows)
 }
 
@@ -358,6 +386,7 @@ fn ompl_leg(
             .arg(args.seeds.to_string())
             .args(["--planner", planner, "--budgets", &budgets.join(",")])
             .arg(format!("{}={}x{}", s.name, g.width, g.height))
+            .args(args.cold.then_some("--cold"))
             .output()
             .with_context(|| format!("running {}", bin.display()))?;
         if !output.status.success() {
@@ -461,6 +490,7 @@ struct Run<'a> {
     start: bi_am_rrt::Point,
     goal: bi_am_rrt::Point,
     budgets: &'a [f64],
+    cold: bool,
 }
 
 impl Run<'_> {
@@ -471,6 +501,9 @@ impl Run<'_> {
     ) -> Result<Measured> {
         let storage = storage.get_or_insert_with(Box::default);
         with_planner_in::<N, _>(storage, self.prep, self.v.cfg, self.seed, self.start, |p| {
+            if self.cold {
+                flush_caches();
+            }
             measure(p, self.goal, self.budgets, self.clock)
         })
     }
@@ -708,6 +741,111 @@ pub fn summary_markdown(rows: &[SummaryRow], budgets: &[f64]) -> String {
             f(r.expansions_per_s, 0),
             f(r.reads_per_expansion, 1)
         ));
+    }
+    s
+}
+
+/// Per leg, the median over seeds of `f` (a run without a value counts as infinite), for one
+/// map and planner.
+fn leg_medians(
+    rows: &[BenchRow],
+    map: &str,
+    planner: &str,
+    f: &dyn Fn(&BenchRow) -> Option<f64>,
+) -> Vec<(usize, f64)> {
+    let mut legs: Vec<usize> = rows
+        .iter()
+        .filter(|r| r.map == map && r.planner == planner)
+        .map(|r| r.leg)
+        .collect();
+    legs.sort_unstable();
+    legs.dedup();
+    legs.into_iter()
+        .filter_map(|l| {
+            let mut v: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.map == map && r.planner == planner && r.leg == l)
+                .map(|r| f(r).unwrap_or(f64::INFINITY))
+                .collect();
+            median(&mut v).map(|m| (l, m))
+        })
+        .collect()
+}
+
+/// Ours / theirs leg by leg (per-leg medians over seeds): the median of the per-leg ratios and
+/// the worst leg (the highest ratio, with its number). `None` when no leg has both.
+pub fn leg_ratios(ours: &[(usize, f64)], theirs: &[(usize, f64)]) -> Option<(f64, usize, f64)> {
+    let mut ratios: Vec<(usize, f64)> = ours
+        .iter()
+        .filter_map(|&(l, a)| {
+            let &(_, b) = theirs.iter().find(|(lb, _)| *lb == l)?;
+            Some((l, a / b))
+        })
+        .filter(|(_, r)| !r.is_nan())
+        .collect();
+    let worst = ratios.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let mut v: Vec<f64> = ratios.drain(..).map(|(_, r)| r).collect();
+    let med = median(&mut v)?;
+    Some((med, worst.0, worst.1))
+}
+
+/// Issue 26's table: each of our planners against OMPL's in the same run, leg by leg (per-leg
+/// medians over seeds, then the median of the per-leg ratios and the worst leg): first-solution
+/// time against RRT-Connect, first path against RRT-Connect + simplify, and the cost at each
+/// budget against Informed RRT*. Below 1 is ours ahead.
+pub fn ratios_markdown(rows: &[BenchRow], budgets: &[f64], cold: bool) -> String {
+    let mode = if cold {
+        "cold: caches flushed (64 MiB written and read) before every query, ours and OMPL's"
+    } else {
+        "warm: each query on the caches the previous one left"
+    };
+    let mut s = format!(
+        "Per-leg ratios, ours / OMPL's in the same run ({mode}); median over legs, and the \
+         worst leg (leg: ratio).\n\n| map | planner | first solution / RRT-Connect | first \
+         path / (RRT-Connect + simplify) |"
+    );
+    for b in budgets {
+        s.push_str(&format!(" cost at {b} s / Informed RRT* |"));
+    }
+    s.push_str("\n|---|---|---:|---:|");
+    for _ in budgets {
+        s.push_str("---:|");
+    }
+    s.push('\n');
+    let cell = |r: Option<(f64, usize, f64)>, digits: usize| match r {
+        Some((m, l, w)) => format!("{m:.digits$} (leg {l}: {w:.digits$})"),
+        None => "-".into(),
+    };
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for r in rows {
+        let k = (r.map.clone(), r.planner.clone());
+        if !r.planner.starts_with("OMPL ") && !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (map, planner) in keys {
+        let ours = |f: &dyn Fn(&BenchRow) -> Option<f64>| leg_medians(rows, &map, &planner, f);
+        let theirs =
+            |name: &str, f: &dyn Fn(&BenchRow) -> Option<f64>| leg_medians(rows, &map, name, f);
+        let first = leg_ratios(
+            &ours(&|r| r.first_us),
+            &theirs(OMPL_RRT_CONNECT, &|r| r.first_us),
+        );
+        let path = leg_ratios(
+            &ours(&|r| r.first_ratio),
+            &theirs(OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_ratio),
+        );
+        s.push_str(&format!(
+            "| {map} | {planner} | {} | {} |",
+            cell(first, 2),
+            cell(path, 3)
+        ));
+        for i in 0..budgets.len() {
+            let get = move |r: &BenchRow| r.cost_ratio.get(i).copied().flatten();
+            let c = leg_ratios(&ours(&get), &theirs(OMPL_INFORMED_RRT_STAR, &get));
+            s.push_str(&format!(" {} |", cell(c, 4)));
+        }
+        s.push('\n');
     }
     s
 }

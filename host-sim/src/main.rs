@@ -266,6 +266,11 @@ enum Command {
         /// proportional to the map's size off that range; README "Lengths that follow the map").
         #[arg(long)]
         paper_lengths: bool,
+        /// Cold queries: the caches are flushed before every measured query (ours and OMPL's:
+        /// 64 MiB written and read back, outside the timed part), instead of each query
+        /// running on the caches the previous one left (warm, the default).
+        #[arg(long)]
+        cold: bool,
     },
     /// Soak test: one planner and one agent for a long time with a new random goal every few
     /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
@@ -675,6 +680,7 @@ fn main() -> Result<()> {
             ompl,
             clock,
             paper_lengths,
+            cold,
         } => {
             if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
                 bail!("--budgets: every budget must be a positive number of seconds");
@@ -696,6 +702,7 @@ fn main() -> Result<()> {
                 table: table.options(),
                 ompl,
                 clock,
+                cold,
             })
             .map(|_| ())
         }

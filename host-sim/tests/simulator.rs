@@ -840,6 +840,7 @@ fn bench_measures_every_leg_variant_and_seed() {
         table: TableOptions::default(),
         ompl: None,
         clock: host_sim::bench::BenchClock::Virtual,
+        cold: false,
     })
     .unwrap();
     assert_eq!(rows.len(), legs * 2 * 2);
@@ -899,8 +900,14 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
         table: TableOptions::default(),
         ompl: Some(script.clone()),
         clock: host_sim::bench::BenchClock::Cpu,
+        cold: false,
     };
     let rows = host_sim::bench::run(&args(3)).unwrap();
+    let ratios = std::fs::read_to_string(dir.path().join("out/ratios.md")).unwrap();
+    assert!(
+        ratios.contains("| open | Bi-AM-RRT*(E) |") && ratios.contains("(warm:"),
+        "{ratios}"
+    );
     let ompl: Vec<_> = rows
         .iter()
         .filter(|r| r.planner == host_sim::bench::OMPL_RRT_CONNECT)
@@ -1192,4 +1199,20 @@ fn run_lengths_follow_the_map() {
         assert_eq!(maze.config(named).e_max, named.e_max);
         assert_eq!(maze.length_scale(), 1.0);
     }
+}
+
+/// Issue 26: `bench`'s per-leg ratios are the median of ours / theirs over the legs both ran,
+/// with the worst leg named; a leg we never solved is an infinite ratio, the worst.
+#[test]
+fn leg_ratios_take_the_median_and_the_worst_leg() {
+    use host_sim::bench::leg_ratios;
+    let ours = [(1, 2.0), (2, 3.0), (3, 10.0)];
+    let theirs = [(1, 4.0), (2, 3.0), (3, 5.0), (4, 1.0)];
+    assert_eq!(leg_ratios(&ours, &theirs), Some((1.0, 3, 2.0)));
+    let ours = [(1, f64::INFINITY), (2, 1.0), (3, 1.0)];
+    let theirs = [(1, 1.0), (2, 2.0), (3, 4.0)];
+    let (median, leg, worst) = leg_ratios(&ours, &theirs).unwrap();
+    assert_eq!((median, leg), (0.5, 1));
+    assert!(worst.is_infinite());
+    assert_eq!(leg_ratios(&ours, &[]), None);
 }
