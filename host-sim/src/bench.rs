@@ -801,7 +801,7 @@ pub fn ratios_markdown(rows: &[BenchRow], budgets: &[f64], cold: bool) -> String
     };
     let mut s = format!(
         "Per-leg ratios, ours / OMPL's in the same run ({mode}); median over legs, and the \
-         worst leg (leg: ratio).\n\n| map | planner | first solution / RRT-Connect | first \
+         worst leg (leg: ratio); 0 where OMPL had no path by then, inf where we had none.\n\n| map | planner | first solution / RRT-Connect | first \
          path / (RRT-Connect + simplify) |"
     );
     for b in budgets {
