@@ -19,8 +19,9 @@ use rand_core::Rng;
 /// both routes are: `libm`'s software routine (the default, stable Rust) and, with the
 /// feature `hw-sqrt` (nightly Rust: `core::f32::math` is unstable), the target's own (the
 /// Cortex-M4F's `vsqrt.f32`, 14 cycles; where a target has none, the compiler calls a
-/// software one). Same bits either way, so host and MCU still agree bit for bit
-/// (`tests/sqrt.rs` compares `libm` with the host's instruction on every exponent).
+/// software one). Same bits either way, so host and MCU still agree bit for bit: the host's
+/// `libm` uses the SSE instruction, the stable firmware the software routine, the `hw-sqrt`
+/// firmware `vsqrt.f32`, and all three print the same twin line (CI compares them).
 #[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
     #[cfg(feature = "hw-sqrt")]

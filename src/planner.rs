@@ -489,7 +489,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// [`Wait::OutOfTime`]). On a real clock a call therefore overruns `t_exp` by at most the
     /// rest of one short piece of an expansion step: measured on a Cortex-M4F model
     /// (`scripts/firmware-sequence.sh`, office, all six goals, 2 x 2,048 nodes, 150 ms),
-    /// 0.55 ms (paper's set) and 0.66-0.96 ms (tuned) at worst. And whatever the clock (even
+    /// 0.67 ms (paper's set) and 0.40 ms (tuned) at worst. And whatever the clock (even
     /// one that never advances) a
     /// call does at most
     /// `max_work_per_call + W_step` units, where `W_step` is the most work between two checks:
@@ -596,7 +596,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let root = self.root_position();
         let pending = follow.is_some_and(|a| a.dist(root) <= self.cfg.e_max / 10.0);
         let steps = if pending {
-            meter.reserving(self.reroot_units().saturating_mul(2), call)
+            meter.reserving(self.reroot_nodes().saturating_mul(2), call)
         } else {
             call
         };
@@ -807,7 +807,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         // A re-rooting refreshes every cost in the tree (with a long first edge split first,
         // a subtree move): it starts only when it ends before `by`.
-        if !meter.affords(self.reroot_units(), &by) {
+        if !meter.affords(self.reroot_nodes(), &by) {
             self.deferred = true;
             return false;
         }
@@ -837,7 +837,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// The nodes a step of [`Planner::follow`] refreshes at most: a re-rooting refreshes every
     /// node's cost, and a long first edge's split moves a subtree first.
-    fn reroot_units(&self) -> u64 {
+    fn reroot_nodes(&self) -> u64 {
         (self.fwd.tree.len() as u64).saturating_mul(2)
     }
 
