@@ -309,8 +309,8 @@ impl<'c, C: Clock + ?Sized> Meter<'c, C> {
     }
 
     /// What this meter measured, for the next one ([`Meter::expecting`]): the slowest rate
-    /// over windows of [`RATE_UNITS`] units (ticks per [`RATE_UNITS`] units) and the slowest
-    /// timed refresh (ticks per [`RATE_UNITS`] nodes); 0 for what it did not measure.
+    /// over windows of `RATE_UNITS` units (ticks per `RATE_UNITS` units) and the slowest
+    /// timed refresh (ticks per `RATE_UNITS` nodes); 0 for what it did not measure.
     pub fn rates(&self) -> (u64, u64) {
         (self.steady.get(), self.refresh.get())
     }

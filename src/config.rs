@@ -69,7 +69,7 @@ pub enum RewireMode {
     },
 }
 
-/// Which parts of Algorithms 4 and 6 run exactly as printed (issue 24). The paper's
+/// Which parts of Algorithms 4-6 and the Meet run exactly as printed (issue 24). The paper's
 /// reading of each is available here, one switch per departure so each can be measured
 /// apart; [`AsPrinted::NONE`] (both named sets) is this crate's reading, documented in
 /// `rewire.rs`. Algorithm 4's printed cost test (`Cost(x_r1) + ...` against `Cost(x_r1)`)
@@ -93,6 +93,13 @@ pub struct AsPrinted {
     /// goal) > d_A(x_r1, goal) + d_A(x_r1, x_r2)`. Off: `d_A(top(S), goal) > d_A(x_r1,
     /// goal)`, the first kind's test.
     pub alg6_clear: bool,
+    /// The paper's Meet ("true when the Euclidean distance between T_f and T_r is less than
+    /// sigma and there is no obstacle blocking it") tests every pair within `sigma` for a
+    /// free segment: after the 16 cheapest pairs (by the joined path's cost) the others in
+    /// index order, until a free one or the call's deadline. Off: the 16 cheapest only, so a
+    /// new node whose cheap partners are all behind a wall waits for the next one (issue 24;
+    /// measured to make no difference, `docs/results-printed.md`).
+    pub meet_all_pairs: bool,
 }
 
 impl AsPrinted {
@@ -102,6 +109,7 @@ impl AsPrinted {
         alg6_takes_x_r2: false,
         alg6_cost: false,
         alg6_clear: false,
+        meet_all_pairs: false,
     };
     /// Every part as printed.
     pub const ALL: Self = Self {
@@ -109,9 +117,16 @@ impl AsPrinted {
         alg6_takes_x_r2: true,
         alg6_cost: true,
         alg6_clear: true,
+        meet_all_pairs: true,
     };
     /// The switches' names, as `host-sim --as-printed` takes them.
-    pub const NAMES: [&'static str; 4] = ["alg4-take", "alg6-take", "alg6-cost", "alg6-clear"];
+    pub const NAMES: [&'static str; 5] = [
+        "alg4-take",
+        "alg6-take",
+        "alg6-cost",
+        "alg6-clear",
+        "meet-all-pairs",
+    ];
 
     /// Sets the switch named `name` (one of [`AsPrinted::NAMES`]); whether the name is known.
     pub fn set(&mut self, name: &str, on: bool) -> bool {
@@ -120,6 +135,7 @@ impl AsPrinted {
             "alg6-take" => &mut self.alg6_takes_x_r2,
             "alg6-cost" => &mut self.alg6_cost,
             "alg6-clear" => &mut self.alg6_clear,
+            "meet-all-pairs" => &mut self.meet_all_pairs,
             _ => return false,
         };
         *field = on;
@@ -127,20 +143,145 @@ impl AsPrinted {
     }
 }
 
-/// Which parameter set a configuration carries. The planner reads only the fields; the
-/// profile labels the set in names and reports.
+/// Which planner a configuration runs: the paper's, or the tuned one. Both run the same
+/// algorithm (Algorithms 1-6 with the switches of Table 1); the tuned profile adds the
+/// engineering changes that won in every measurement (`docs/performance.md`, "One tuned
+/// default"), which have no switch of their own:
+/// - the steering candidates spread evenly in angle ([`crate::geometry::DiscFan`]) instead of
+///   independent draws in the disc;
+/// - `Nearest` tests the Euclidean-nearest node's view of the sample over the steering step
+///   only, not the whole way;
+/// - a segment tested in an expansion is not tested again in it (same decisions, less work);
+/// - no root rewiring before the goal joins (the same first paths, less work);
+/// - RRT-Connect's greedy step between the two trees while searching (Kuffner and LaValle);
+/// - a node added inside the informed ellipse rewires its neighbours (RRT*'s step);
+/// - a neighbourhood inside the ellipse that the density rule holds trades its worst leaf
+///   for a state that bounds a shorter path, and a full arena trades leaves that cannot
+///   improve the path for states that can ([`Memory::recycle_cover`] keeps a cover).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Profile {
     /// The paper's algorithm with its Table 2 parameters (the named constructors).
     Paper,
-    /// [`Config::tuned`]: the same algorithm with the engineering changes listed there and
-    /// measured in `docs/performance.md`.
+    /// [`Config::tuned`] (the default): the engineering changes above and the parameters
+    /// listed there, measured in `docs/performance.md`.
     Tuned,
 }
 
-/// Everything that configures a planner. Start from a named constructor
-/// ([`Config::am_rrt`], [`Config::bi_am_rrt`], [`Config::table1`], ...) and adjust fields.
+impl Profile {
+    /// Whether the tuned profile's changes run.
+    pub const fn is_tuned(self) -> bool {
+        matches!(self, Self::Tuned)
+    }
+}
+
+/// Growth: sampling, steering and the meeting of the two trees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Search {
+    /// `e_max`: longest edge added by an expansion, and the `Nearby` radius, in metres.
+    pub e_max: f32,
+    /// Steering step while the tree's goal is not in it (the first solution), in metres; 0 =
+    /// `e_max` (the paper). Edges stay free whatever their length; `Nearby` keeps `e_max`.
+    pub e_search: f32,
+    /// `sigma`: connection distance of the two trees, in metres.
+    pub sigma: f32,
+    /// Candidates drawn by the stochastic steering (replaces the reference's 2 ms `t_steer`).
+    pub steer_candidates: u16,
+    /// Rejection-sampling attempts for one free sample before the expansion is skipped.
+    pub sample_attempts: u16,
+    /// Probability threshold above which the goal (or RT-RRT*'s goal line) is sampled while
+    /// the goal is not in the tree (paper: 0.7).
+    pub p_goal: f32,
+    /// Below this probability a uniform state is sampled, above it the informed ellipse once
+    /// the goal is in the tree (reference: 0.7 / 1.5; the paper prints 0.5).
+    pub p_uniform: f32,
+    /// Once the goal is in the tree, the probability that a sample is drawn in the `e_max`
+    /// disc around a node of the current path instead (RRT*-Smart's beacons, Nasir et al.
+    /// 2013: after the shortcuts, the path's nodes are its corners, where a new node can still
+    /// shorten it); 0 = never (the paper).
+    pub p_beacon: f32,
+}
+
+/// Rewiring and the root's moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Rewiring {
+    /// `t_root`: root rewiring budget per expansion.
+    pub t_root: Duration,
+    /// `t_goal` (AM-RRT*) or `t_rand` (RT-RRT*): goal or random rewiring budget per expansion
+    /// (goal rewiring gets it twice with the new rewiring: once per kind).
+    pub t_goal: Duration,
+    /// How the rewiring phases share time with expansion.
+    pub mode: RewireMode,
+    /// Path nodes offered their grandparent as parent per expansion once the goal is in the
+    /// tree (Theta*'s shortcut; module `rewire`); 0 = none (the paper).
+    pub path_shortcuts: u16,
+    /// Longest step of the root along the path, in metres: the root is the agent's next
+    /// waypoint, and the agent must reach it before it can turn, so when the path's next edge
+    /// is longer (search steps, connections, shortcuts and rewiring make long straight
+    /// edges) a node this far along it becomes the root instead, and the root moves on past
+    /// nodes the agent already stands on; a goal that changes then finds the agent at most
+    /// this far from where it can turn. With a step, the root also moves only along a path
+    /// to the goal (not towards the node nearest a goal not yet joined, unless the arena is
+    /// full and the search stuck: [`crate::planner::STUCK_EXPANSIONS`]), and with
+    /// `path_shortcuts` the node after the next one is first offered the root as parent. 0 =
+    /// to the next node whatever its distance, also while searching (the paper).
+    pub root_step: f32,
+}
+
+/// What one `plan` or `grow` call may spend, and how often it reads the clock.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Budget {
+    /// `t_exp`: expansion time per `plan` call.
+    pub t_exp: Duration,
+    /// Hard cap on expansions per call, whatever the clock says (a frozen clock still gives
+    /// bounded calls).
+    pub max_expansions: u32,
+    /// Hard cap on the work of one call, in work units (one grid cell tested, node visited
+    /// or metric evaluated; about 12 ns each on the development machine and about 200
+    /// instructions on a Cortex-M4F): once reached, every budget of the call reads as spent,
+    /// whatever the clock says. The default, 25,000,000, is twice the paper's `t_exp` of
+    /// 150 ms on the development machine. See [`crate::Planner::plan`] for the bound.
+    pub max_work: u32,
+    /// Work units between two clock readings of the deadline checks (see
+    /// [`crate::clock::Meter::reading_every`]); 0 reads the clock at every check (the paper's
+    /// implementation). The call then overruns `t_exp` by at most this much work more.
+    pub clock_every: u32,
+    /// Above `clock_every`: the readings are paced by what they cost
+    /// ([`crate::clock::Meter::paced`]), at most this many work units apart (and never more
+    /// than 0.25 ms of work at the slowest rate measured), so that a reading costs under 1 %
+    /// of the work between two; `clock_every` apart while a reading's cost is not measurable
+    /// (a virtual clock), down to [`crate::clock::MIN_PACED`] for a cycle counter. 0 (or at
+    /// most `clock_every`): every `clock_every` units (the paper).
+    pub clock_every_max: u32,
+}
+
+/// Where the arena's nodes go: the density rule and the trades of a full arena.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Memory {
+    /// `n_max`: node density limit within the neighbourhood.
+    pub n_max: u16,
+    /// Density limit for new states inside the informed ellipse once the goal is in the tree
+    /// (where a node can still shorten the path); 0 = `n_max` everywhere (the paper).
+    pub n_max_informed: u16,
+    /// Tuned profile: a leaf is traded (full arena, or a neighbourhood the density rule
+    /// holds) only while at least this many other nodes share its spatial-index bucket
+    /// (about `e_max` square), so every part of the map the tree has reached keeps that many
+    /// nodes for the goals that come next instead of giving them all to the current path; 0 =
+    /// no such rule. Capped at `N / (2 x buckets)` so the cover holds at most half the arena
+    /// (none with 256 nodes on a 60 m map, 2 with 8,192 nodes on the 100 m and 200 m
+    /// reference maps).
+    pub recycle_cover: u16,
+}
+
+/// Everything that configures a planner, on one screen: which planner (Table 1's two
+/// switches on a base and a metric, and the profile), then four groups of parameters.
+/// [`Config::default`] is the tuned Bi-AM-RRT*(D); [`Config::paper`] the paper's, and
+/// [`Config::table1`] all 20 of the paper's planners. Fit the lengths to a map with
+/// [`Config::for_grid`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
@@ -153,150 +294,26 @@ pub struct Config {
     /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`). On RT-RRT*
     /// only Algorithm 4 applies (it has no goal rewiring).
     pub new_rewiring: bool,
-    /// When the trees meet, the reverse tree joins the forward tree *whole*, re-rooted at the
-    /// meeting node (as far as the arena has room), instead of only its trunk from the meeting
-    /// node to the goal. Off (trunk only) is the paper; keeping the branches is its stated
-    /// future work.
-    pub keep_reverse_branches: bool,
-    /// `t_exp`: expansion time per `plan` call.
-    pub t_exp: Duration,
-    /// `t_root`: root rewiring budget per expansion.
-    pub t_root: Duration,
-    /// `t_goal` (AM-RRT*) or `t_rand` (RT-RRT*): goal or random rewiring budget per expansion
-    /// (goal rewiring gets it twice with the new rewiring: once per kind).
-    pub t_goal: Duration,
-    /// `e_max`: longest edge added by an expansion, and the `Nearby` radius, in metres.
-    pub e_max: f32,
-    /// `n_max`: node density limit within the neighbourhood.
-    pub n_max: u16,
-    /// `sigma`: connection distance of the two trees, in metres.
-    pub sigma: f32,
-    /// Candidates drawn by the stochastic steering (replaces the reference's 2 ms `t_steer`).
-    pub steer_candidates: u16,
-    /// Rejection-sampling attempts for one free sample before the expansion is skipped.
-    pub sample_attempts: u16,
-    /// How rewiring shares time with expansion.
-    pub rewire_mode: RewireMode,
-    /// Hard cap on expansions per `plan` call, whatever the clock says (a frozen clock still
-    /// gives bounded calls).
-    pub max_expansions_per_call: u32,
-    /// Hard cap on the work of one `plan` or `grow` call, in work units (one grid cell tested,
-    /// node visited or metric evaluated; about 12 ns each on the development machine and about
-    /// 200 instructions on a Cortex-M4F): once reached, every budget of the call reads as
-    /// spent, whatever the clock says. The default, 25,000,000, is twice the paper's `t_exp`
-    /// of 150 ms on the development machine. See [`crate::Planner::plan`] for the bound.
-    pub max_work_per_call: u32,
-    /// Probability threshold above which the goal (or RT-RRT*'s goal line) is sampled while
-    /// the goal is not in the tree (paper: 0.7).
-    pub p_goal: f32,
-    /// Below this probability a uniform state is sampled, above it the informed ellipse once
-    /// the goal is in the tree (reference: 0.7 / 1.5; the paper prints 0.5).
-    pub p_uniform: f32,
-    /// Work units between two clock readings of the deadline checks (see
-    /// [`crate::clock::Meter::reading_every`]); 0 reads the clock at every check (the paper's
-    /// implementation). The call then overruns `t_exp` by at most this much work more.
-    pub clock_every: u32,
-    /// Above `clock_every`: the readings are paced by what they cost
-    /// ([`crate::clock::Meter::paced`]), at most this many work units apart (and never more
-    /// than 0.25 ms of work at the slowest rate measured), so that a reading costs under 1 %
-    /// of the work between two; `clock_every` apart while a reading's cost is not measurable
-    /// (a virtual clock), down to [`crate::clock::MIN_PACED`] for a cycle counter. 0 (or at
-    /// most `clock_every`): every `clock_every` units (the paper).
-    pub clock_every_max: u32,
-    /// Density limit for new states inside the informed ellipse once the goal is in the tree
-    /// (where a node can still shorten the path); 0 = `n_max` everywhere (the paper).
-    pub n_max_informed: u16,
-    /// Once the goal is in the tree over a free path and the arena is full, a new state that
-    /// could shorten the path takes the slot of a leaf whose cost bound `Cost(x) + d_E(x, goal)`
-    /// is higher than its own (a node that cannot do better than the new one), so the tree keeps
-    /// improving forever. Off: a full tree only rewires (the paper).
-    pub recycle_when_full: bool,
-    /// With `recycle_when_full`: a leaf is traded only while at least this many other nodes
-    /// share its spatial-index bucket (about `e_max` square), so every part of the map the
-    /// tree has reached keeps that many nodes for the goals that come next instead of giving
-    /// them all to the current path; 0 = no such rule. Capped at `N / (2 x buckets)` so the
-    /// cover holds at most half the arena (none with 256 nodes on a 60 m map, 2 with 8,192
-    /// nodes on the 100 m and 200 m reference maps).
-    pub recycle_cover: u16,
-    /// A node added inside the informed ellipse offers itself as parent to its neighbours
-    /// (RRT*'s rewiring step) right away, besides the sweeps. Off: only the sweeps rewire
-    /// (the paper).
-    pub rewire_new: bool,
-    /// Steering step while the tree's goal is not in it (the first solution), in metres; 0 =
-    /// `e_max` (the paper). Edges stay free whatever their length; `Nearby` keeps `e_max`.
-    pub e_search: f32,
-    /// RRT-Connect's greedy step in bidirectional search (Kuffner and LaValle): when a node
-    /// added to one tree meets nothing in the other within `sigma`, the other tree walks
-    /// straight towards it from its nearest node in free steps of `e_search` (or `e_max`),
-    /// adding each as a node, until it sees the new node (the trees meet) or a step is
-    /// blocked. Off: trees meet only within `sigma` (the paper).
-    pub connect: bool,
-    /// Path nodes offered their grandparent as parent per expansion once the goal is in the
-    /// tree (Theta*'s shortcut; module `rewire`); 0 = none (the paper).
-    pub path_shortcuts: u16,
-    /// Once the goal is in the tree, the probability that a sample is drawn in the `e_max`
-    /// disc around a node of the current path instead (RRT*-Smart's beacons, Nasir et al.
-    /// 2013: after the shortcuts, the path's nodes are its corners, where a new node can still
-    /// shorten it); 0 = never (the paper).
-    pub p_beacon: f32,
-    /// Longest step of the root along the path, in metres: the root is the agent's next
-    /// waypoint, and the agent must reach it before it can turn, so when the path's next edge
-    /// is longer (search steps, connections, shortcuts and rewiring make long straight
-    /// edges) a node this far along it becomes the root instead, and the root moves on past
-    /// nodes the agent already stands on; a goal that changes then finds the agent at most
-    /// this far from where it can turn. With a step, the root also moves only along a path
-    /// to the goal (not towards the node nearest a goal not yet joined, unless the arena is
-    /// full and the search stuck: [`crate::planner::STUCK_EXPANSIONS`]), and with
-    /// `path_shortcuts` the node after the next one is first offered the root as parent. 0 =
-    /// to the next node whatever its distance, also while searching (the paper).
-    pub root_step: f32,
-    /// Beacon states ([`Config::p_beacon`]) join whatever the density around them (`n_max`,
-    /// `n_max_informed`): the path's corners, where a node can still shorten it, keep
-    /// densifying until the arena is full and then by trades (`recycle_when_full`). Off:
-    /// beacon states obey the density rule like any other sample.
-    pub dense_beacons: bool,
-    /// Once the goal is in the tree, a state the density rule turns away inside the informed
-    /// ellipse takes the slot of the neighbourhood's worst leaf (the highest `Cost(x) +
-    /// d_E(x, goal)`) when that is above the cost bound of the new state: the node count stays,
-    /// the nodes move to where they can shorten the path (the sum of the bounds of a
-    /// neighbourhood only decreases, so this never cycles). Off: a dense neighbourhood takes
-    /// no new state (the paper).
-    pub density_trades: bool,
-    /// Steering candidates are spread evenly in angle around the node ([`crate::geometry::DiscFan`]:
-    /// a random first direction, then equal turns, each at a random radius) instead of drawn
-    /// independently in the disc: every direction is covered by fewer candidates, and one
-    /// sine-cosine serves the whole batch. Off: independent uniform draws (the paper's stochastic
-    /// steering as the reference implements it).
-    pub steer_fan: bool,
-    /// `Nearest` tests the Euclidean-nearest node's view of the sample only over the steering
-    /// step towards it (at most `e_max`, or `e_search` while searching) instead of the whole
-    /// way: a node that can make its step is the nearest, and the steering starts from that
-    /// tested step. A far sample (the goal behind a wall, a uniform state across the map) no
-    /// longer costs a segment test as long as the map. Off: the whole segment (AM-RRT*).
-    pub nearest_step: bool,
-    /// A segment tested in an expansion is not tested again in it: the steering's straight
-    /// step after `nearest_step`'s test of it, the parent's segment after the steering's, the
-    /// greedy connection's segment after the meet test found it blocked. Same decisions, less
-    /// work. Off: every test is made (and charged) as the paper's implementation does.
-    pub reuse_tests: bool,
-    /// Root rewiring of both trees while the goal is not in the forward tree (the paper). Off:
-    /// while searching, every expansion goes to growth, and rewiring starts when the goal
-    /// joins (the reverse tree, dropped then, is never rewired). On the reference maps the
-    /// first paths were the same either way (2,400 benchmark runs): a tree built by choosing
-    /// each new node's best parent has little to rewire before it holds a path.
-    pub rewire_while_searching: bool,
-    /// The trees' Meet tests every pair within `sigma` for a free segment, as the paper's
-    /// Meet ("true when the Euclidean distance between T_f and T_r is less than sigma and there
-    /// is no obstacle blocking it"): after the 16 cheapest pairs (by the joined path's cost)
-    /// the others in index order, until a free one or the call's deadline. Off (both named
-    /// sets): the 16 cheapest only, so a new node whose cheap partners are all behind a wall
-    /// waits for the next one (issue 24; office measured in `docs/results-notes.md`).
-    pub meet_all_pairs: bool,
-    /// Which parts of Algorithms 4 and 6 run as printed ([`AsPrinted`]; both named sets:
-    /// none).
-    pub as_printed: AsPrinted,
-    /// The parameter set's label (names and reports).
+    /// The paper's planner or the tuned one (names and reports say which).
     pub profile: Profile,
+    /// Sampling, steering, meeting.
+    pub search: Search,
+    /// Rewiring and the root.
+    pub rewiring: Rewiring,
+    /// Time and work per call.
+    pub budget: Budget,
+    /// The density rule and trades.
+    pub memory: Memory,
+    /// Which parts of Algorithms 4-6 run as printed ([`AsPrinted`]; both profiles: none).
+    pub as_printed: AsPrinted,
+}
+
+impl Default for Config {
+    /// The tuned Bi-AM-RRT*(D): what a user gets without choosing (fit it to the map with
+    /// [`Config::for_grid`]).
+    fn default() -> Self {
+        Self::bi_am_rrt(MetricKind::Diffusion).tuned()
+    }
 }
 
 impl Config {
@@ -311,45 +328,49 @@ impl Config {
             metric,
             bidirectional: false,
             new_rewiring: false,
-            keep_reverse_branches: false,
-            t_exp: Duration::from_millis(150),
-            t_root: Duration::from_millis(t_root),
-            t_goal: Duration::from_millis(t_goal),
-            e_max: 5.0,
-            n_max,
-            sigma: 30.0,
-            steer_candidates: 24,
-            sample_attempts: 64,
-            rewire_mode: RewireMode::PerExpansion { visits: 24 },
-            max_expansions_per_call: 20_000,
-            max_work_per_call: 25_000_000,
-            p_goal: 0.7,
-            p_uniform: 0.7 / 1.5,
-            clock_every: 0,
-            clock_every_max: 0,
-            n_max_informed: 0,
-            recycle_when_full: false,
-            recycle_cover: 0,
-            e_search: 0.0,
-            rewire_new: false,
-            connect: false,
-            path_shortcuts: 0,
-            p_beacon: 0.0,
-            root_step: 0.0,
-            dense_beacons: false,
-            density_trades: false,
-            steer_fan: false,
-            nearest_step: false,
-            reuse_tests: false,
-            rewire_while_searching: true,
-            meet_all_pairs: false,
-            as_printed: AsPrinted::NONE,
             profile: Profile::Paper,
+            search: Search {
+                e_max: 5.0,
+                e_search: 0.0,
+                sigma: 30.0,
+                steer_candidates: 24,
+                sample_attempts: 64,
+                p_goal: 0.7,
+                p_uniform: 0.7 / 1.5,
+                p_beacon: 0.0,
+            },
+            rewiring: Rewiring {
+                t_root: Duration::from_millis(t_root),
+                t_goal: Duration::from_millis(t_goal),
+                mode: RewireMode::PerExpansion { visits: 24 },
+                path_shortcuts: 0,
+                root_step: 0.0,
+            },
+            budget: Budget {
+                t_exp: Duration::from_millis(150),
+                max_expansions: 20_000,
+                max_work: 25_000_000,
+                clock_every: 0,
+                clock_every_max: 0,
+            },
+            memory: Memory {
+                n_max,
+                n_max_informed: 0,
+                recycle_cover: 0,
+            },
+            as_printed: AsPrinted::NONE,
         }
     }
 
-    /// The tuned version of a configuration: the same algorithm and switches, with the
-    /// engineering changes measured against the paper's parameters (`docs/performance.md`):
+    /// The paper's proposal, Bi-AM-RRT*(D) with Table 2's parameters (labelled as the
+    /// paper's: [`Profile::Paper`]).
+    pub const fn paper() -> Self {
+        Self::bi_am_rrt(MetricKind::Diffusion)
+    }
+
+    /// The tuned version of a configuration: the same planner (base, metric, Table 1's
+    /// switches) with the tuned profile's changes ([`Profile`]) and these parameters,
+    /// measured against the paper's (`docs/performance.md`):
     /// - `clock_every` 256 and `clock_every_max` 8,192: the deadlines read the clock at most
     ///   every 256 work units instead of 50-80 times per expansion, and the readings are paced
     ///   by what they cost: a CPU-time clock (about 0.5 us a reading here) is read every few
@@ -359,49 +380,31 @@ impl Config {
     ///   expansions, the same rewiring work per second;
     /// - `e_search` 20 m: long steps until the first solution (the edges are tested free as
     ///   any other; rewiring shortens them later);
-    /// - `steer_fan` with 16 candidates: the steering candidates spread evenly in angle, so
-    ///   16 find the way around an obstacle as well as 24 independent draws did;
-    /// - `nearest_step`: `Nearest` tests its Euclidean choice over the steering step only;
-    ///   `reuse_tests`: no segment is tested twice in an expansion; `rewire_while_searching`
-    ///   off: no root rewiring before the goal joins (same first paths, less work);
+    /// - 16 steering candidates, spread evenly in angle (as well as 24 independent draws);
     /// - `n_max_informed` 4 `n_max`: the tree densifies inside the informed ellipse after the
     ///   density rule has saturated the rest of the map;
-    /// - `recycle_when_full`: a full arena trades leaves that cannot improve the path for
-    ///   states that can, never one of the last two nodes of a spatial-index bucket
-    ///   (`recycle_cover` 2): a cover of every part of the map reached stays for the next
-    ///   goals (with one node per bucket, about `e_max` apart, rewiring could not link them);
-    /// - `rewire_new`: a node added inside the ellipse rewires its neighbours (RRT*'s step);
-    /// - `connect`: RRT-Connect's greedy step between the two trees while searching;
+    /// - `recycle_cover` 2: trades never take one of the last two nodes of a spatial-index
+    ///   bucket: a cover of every part of the map reached stays for the next goals;
     /// - `p_goal` 0.5: half the samples are the goal while it is not in the tree (the paper
     ///   samples it 30 % of the time);
     /// - `path_shortcuts` 4: the path straightens between its corner nodes (Theta*'s step);
     /// - `p_beacon` 0.2: a fifth of the samples fall near the path's nodes (its corners);
     /// - `root_step` `e_max`: the root (the agent's next waypoint) advances at most `e_max`
     ///   at a time along the long edges the shortcuts make, only along a path to the goal,
-    ///   and takes the path's node after next as child first when that is shorter;
-    /// - `density_trades`: a dense neighbourhood inside the ellipse trades its worst leaf for
-    ///   a state that bounds a shorter path, so the tree keeps improving at the density rule.
+    ///   and takes the path's node after next as child first when that is shorter.
     pub const fn tuned(mut self) -> Self {
-        self.clock_every = 256;
-        self.clock_every_max = 8192;
-        self.rewire_mode = RewireMode::PerExpansion { visits: 4 };
-        self.e_search = 20.0;
-        self.steer_fan = true;
-        self.nearest_step = true;
-        self.reuse_tests = true;
-        self.rewire_while_searching = false;
-        self.steer_candidates = 16;
-        self.n_max_informed = self.n_max.saturating_mul(4);
-        self.recycle_when_full = true;
-        self.recycle_cover = 2;
-        self.rewire_new = true;
-        self.connect = true;
-        self.p_goal = 0.5;
-        self.path_shortcuts = 4;
-        self.p_beacon = 0.2;
-        self.root_step = self.e_max;
-        self.density_trades = true;
         self.profile = Profile::Tuned;
+        self.budget.clock_every = 256;
+        self.budget.clock_every_max = 8192;
+        self.rewiring.mode = RewireMode::PerExpansion { visits: 4 };
+        self.search.e_search = 20.0;
+        self.search.steer_candidates = 16;
+        self.memory.n_max_informed = self.memory.n_max.saturating_mul(4);
+        self.memory.recycle_cover = 2;
+        self.search.p_goal = 0.5;
+        self.rewiring.path_shortcuts = 4;
+        self.search.p_beacon = 0.2;
+        self.rewiring.root_step = self.search.e_max;
         self
     }
 
@@ -422,10 +425,10 @@ impl Config {
         let step = |len: f32| {
             if len > 0.0 { (len * k).max(floor) } else { len }
         };
-        self.e_max = step(self.e_max);
-        self.e_search = step(self.e_search);
-        self.root_step = step(self.root_step);
-        self.sigma *= k;
+        self.search.e_max = step(self.search.e_max);
+        self.search.e_search = step(self.search.e_search);
+        self.rewiring.root_step = step(self.rewiring.root_step);
+        self.search.sigma *= k;
         self
     }
 
@@ -467,10 +470,10 @@ impl Config {
     /// The steering step while a tree's goal is not in it: `e_search`, or `e_max` when that
     /// is 0.
     pub fn search_step(&self) -> f32 {
-        if self.e_search > 0.0 {
-            self.e_search
+        if self.search.e_search > 0.0 {
+            self.search.e_search
         } else {
-            self.e_max
+            self.search.e_max
         }
     }
 
@@ -480,21 +483,15 @@ impl Config {
         self
     }
 
-    /// With the reverse tree's branches kept at the meet (see the field).
-    pub const fn with_reverse_branches(mut self, on: bool) -> Self {
-        self.keep_reverse_branches = on;
-        self
-    }
-
     /// With the connection distance `sigma`.
     pub const fn with_sigma(mut self, sigma: f32) -> Self {
-        self.sigma = sigma;
+        self.search.sigma = sigma;
         self
     }
 
     /// With a rewiring mode.
     pub const fn with_rewire_mode(mut self, mode: RewireMode) -> Self {
-        self.rewire_mode = mode;
+        self.rewiring.mode = mode;
         self
     }
 
@@ -541,35 +538,27 @@ impl Config {
     /// per-call caps at least 1, and the two probabilities in `[0, 1]`.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let unit = |p: f32| (0.0..=1.0).contains(&p);
+        let (s, b) = (&self.search, &self.budget);
         let checks = [
-            (!self.t_exp.is_zero(), ConfigError::TExp),
+            (!b.t_exp.is_zero(), ConfigError::TExp),
+            (s.e_max.is_finite() && s.e_max > 0.0, ConfigError::EMax),
+            (self.memory.n_max >= 1, ConfigError::NMax),
+            (s.sigma.is_finite() && s.sigma >= 0.0, ConfigError::Sigma),
             (
-                self.e_max.is_finite() && self.e_max > 0.0,
-                ConfigError::EMax,
-            ),
-            (self.n_max >= 1, ConfigError::NMax),
-            (
-                self.sigma.is_finite() && self.sigma >= 0.0,
-                ConfigError::Sigma,
-            ),
-            (
-                self.e_search.is_finite() && self.e_search >= 0.0,
+                s.e_search.is_finite() && s.e_search >= 0.0,
                 ConfigError::ESearch,
             ),
             (
-                self.root_step.is_finite() && self.root_step >= 0.0,
+                self.rewiring.root_step.is_finite() && self.rewiring.root_step >= 0.0,
                 ConfigError::RootStep,
             ),
-            (self.steer_candidates >= 1, ConfigError::SteerCandidates),
-            (self.sample_attempts >= 1, ConfigError::SampleAttempts),
-            (
-                self.max_expansions_per_call >= 1,
-                ConfigError::MaxExpansions,
-            ),
-            (self.max_work_per_call >= 1, ConfigError::MaxWork),
-            (unit(self.p_goal), ConfigError::PGoal),
-            (unit(self.p_uniform), ConfigError::PUniform),
-            (unit(self.p_beacon), ConfigError::PBeacon),
+            (s.steer_candidates >= 1, ConfigError::SteerCandidates),
+            (s.sample_attempts >= 1, ConfigError::SampleAttempts),
+            (b.max_expansions >= 1, ConfigError::MaxExpansions),
+            (b.max_work >= 1, ConfigError::MaxWork),
+            (unit(s.p_goal), ConfigError::PGoal),
+            (unit(s.p_uniform), ConfigError::PUniform),
+            (unit(s.p_beacon), ConfigError::PBeacon),
         ];
         match checks.iter().find(|(ok, _)| !ok) {
             Some(&(_, e)) => Err(e),
@@ -713,14 +702,17 @@ mod tests {
             }
             // A 20 m map at 0.05 m: a fifth of every length.
             let f = c.for_map(20.0, 15.0, 0.05);
-            assert!((f.e_max - c.e_max * 0.2).abs() < 1e-6);
-            assert!((f.sigma - c.sigma * 0.2).abs() < 1e-5);
-            assert!((f.e_search - c.e_search * 0.2).abs() < 1e-5);
-            assert!((f.root_step - c.root_step * 0.2).abs() < 1e-6);
+            assert!((f.search.e_max - c.search.e_max * 0.2).abs() < 1e-6);
+            assert!((f.search.sigma - c.search.sigma * 0.2).abs() < 1e-5);
+            assert!((f.search.e_search - c.search.e_search * 0.2).abs() < 1e-5);
+            assert!((f.rewiring.root_step - c.rewiring.root_step * 0.2).abs() < 1e-6);
             assert_eq!(f.validate(), Ok(()));
             // 400 m: twice; a tiny coarse map keeps steps of 4 cells.
-            assert_eq!(c.for_map(400.0, 100.0, 1.0).e_max, c.e_max * 2.0);
-            assert_eq!(c.for_map(8.0, 8.0, 0.5).e_max, 2.0);
+            assert_eq!(
+                c.for_map(400.0, 100.0, 1.0).search.e_max,
+                c.search.e_max * 2.0
+            );
+            assert_eq!(c.for_map(8.0, 8.0, 0.5).search.e_max, 2.0);
         }
         assert_eq!(length_scale(f32::NAN), 1.0);
         assert_eq!(length_scale(50.0), 0.5);
@@ -736,22 +728,22 @@ mod tests {
         let base = Config::bi_am_rrt(MetricKind::Diffusion);
         type Case = (fn(&mut Config), ConfigError);
         let cases: [Case; 13] = [
-            (|c| c.e_max = f32::NAN, ConfigError::EMax),
-            (|c| c.e_max = -1.0, ConfigError::EMax),
-            (|c| c.e_max = f32::INFINITY, ConfigError::EMax),
-            (|c| c.sigma = f32::NAN, ConfigError::Sigma),
-            (|c| c.sigma = -3.0, ConfigError::Sigma),
-            (|c| c.t_exp = Duration::ZERO, ConfigError::TExp),
-            (|c| c.p_goal = 1.5, ConfigError::PGoal),
-            (|c| c.p_beacon = f32::NAN, ConfigError::PBeacon),
-            (|c| c.p_uniform = f32::NAN, ConfigError::PUniform),
-            (|c| c.n_max = 0, ConfigError::NMax),
-            (|c| c.sample_attempts = 0, ConfigError::SampleAttempts),
+            (|c| c.search.e_max = f32::NAN, ConfigError::EMax),
+            (|c| c.search.e_max = -1.0, ConfigError::EMax),
+            (|c| c.search.e_max = f32::INFINITY, ConfigError::EMax),
+            (|c| c.search.sigma = f32::NAN, ConfigError::Sigma),
+            (|c| c.search.sigma = -3.0, ConfigError::Sigma),
+            (|c| c.budget.t_exp = Duration::ZERO, ConfigError::TExp),
+            (|c| c.search.p_goal = 1.5, ConfigError::PGoal),
+            (|c| c.search.p_beacon = f32::NAN, ConfigError::PBeacon),
+            (|c| c.search.p_uniform = f32::NAN, ConfigError::PUniform),
+            (|c| c.memory.n_max = 0, ConfigError::NMax),
             (
-                |c| c.max_expansions_per_call = 0,
-                ConfigError::MaxExpansions,
+                |c| c.search.sample_attempts = 0,
+                ConfigError::SampleAttempts,
             ),
-            (|c| c.max_work_per_call = 0, ConfigError::MaxWork),
+            (|c| c.budget.max_expansions = 0, ConfigError::MaxExpansions),
+            (|c| c.budget.max_work = 0, ConfigError::MaxWork),
         ];
         for (set, want) in cases {
             let mut c = base;

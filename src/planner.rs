@@ -41,11 +41,12 @@
 //! tested for a free segment in cost order, and the first free one is taken. The reverse tree's
 //! trunk (from `b` to the goal) is then grafted below `a`, each edge keeping its blocked flag,
 //! so the goal joins the forward tree; the reverse tree is emptied and search continues with the
-//! forward tree alone. With `connect` (tuned configurations), a node that meets nothing within
-//! `sigma` (no free pair, or a refused graft) makes the other tree walk straight towards it
-//! from its nearest node (with `reuse_tests`, not when the meet test already found that
-//! node's segment blocked), in free steps
-//! of `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. Search
+//! forward tree alone. In the tuned profile, a node that meets nothing within `sigma` (no free
+//! pair, or a refused graft) makes the other tree walk straight towards it from its nearest
+//! node (not one whose segment the meet test already found blocked), in free steps of
+//! `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. With
+//! [`crate::AsPrinted::meet_all_pairs`] the pairs after the 16 cheapest are tested too (the
+//! paper's Meet). Search
 //! time is read when the goal joins, not at the end of the call.
 //!
 //! # Dynamic obstacles
@@ -69,8 +70,8 @@ use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
 use crate::tree::{Cost, NodeId, Tree};
 
-/// With a root step ([`Config::root_step`]), the root waits for the goal to join before it
-/// moves, unless the forward arena is full and the search has made this many expansions per
+/// With a root step (`root_step`, [`Config::rewiring`]), the root waits for the goal to join
+/// before it moves, unless the forward arena is full and the search has made this many expansions per
 /// node of the arena without the goal: then it moves on towards the node nearest the goal, as
 /// the paper's planners always do (liveness: a full tree that cannot move never joins).
 pub const STUCK_EXPANSIONS: u64 = 4;
@@ -258,7 +259,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         map.check_point(start)?;
         metric.check_map(map.grid()).map_err(SetupError::Metric)?;
-        let side = cfg.e_max.max(map.grid().cell_size());
+        let side = cfg.search.e_max.max(map.grid().cell_size());
         let Storage { forward, reverse } = storage;
         for store in [&mut *forward, &mut *reverse] {
             if !store.index.reshape(w, h, side) {
@@ -298,7 +299,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if t_exp.is_zero() {
             return Err(crate::error::ConfigError::TExp);
         }
-        self.cfg.t_exp = t_exp;
+        self.cfg.budget.t_exp = t_exp;
         Ok(())
     }
 
@@ -474,13 +475,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     ///
     /// `t_exp` counts from the moment of the call: anchoring the agent (at most one O(N)
     /// re-rooting) and following it (at most [`FOLLOW_STEPS`]) spend it first. A call stops
-    /// expanding when `t_exp` has passed on `clock`, after `max_expansions_per_call`
-    /// expansions, or once `max_work_per_call` work units are done, whichever comes first;
-    /// every rewiring phase checks the same limits before each node it visits, and the metric
-    /// nearest scan every 64 nodes (with [`Config::clock_every`] set, these checks reuse the
-    /// last clock reading until that much work has been done since it, or with
-    /// [`Config::clock_every_max`] up to that much when a reading is costly, adding at most
-    /// that much work to the overrun). Work that cannot stop half-way and grows with the tree
+    /// expanding when `t_exp` has passed on `clock`, after `max_expansions` expansions, or
+    /// once `max_work` work units are done ([`Config::budget`]), whichever comes first; every
+    /// rewiring phase checks the same limits before each node it visits, and the metric
+    /// nearest scan every 64 nodes (with the budget's `clock_every` set, these checks reuse
+    /// the last clock reading until that much work has been done since it, or with
+    /// `clock_every_max` up to that much when a reading is costly, adding at most that much
+    /// work to the overrun). Work that cannot stop half-way and grows with the tree
     /// (a re-rooting, a rewire that moves a large subtree: each refreshes the cost of every
     /// node it carries) starts only when it ends before the deadline at the slowest rate the
     /// calls have measured ([`Meter::affords`]); while the agent waits at the root, the
@@ -490,17 +491,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// rest of one short piece of an expansion step: measured on a Cortex-M4F model
     /// (`scripts/firmware-sequence.sh`, office, all six goals, 2 x 2,048 nodes, 150 ms),
     /// 0.67 ms (paper's set) and 0.40 ms (tuned) at worst. And whatever the clock (even
-    /// one that never advances) a
-    /// call does at most
-    /// `max_work_per_call + W_step` units, where `W_step` is the most work between two checks:
+    /// one that never advances) a call does at most `max_work + W_step` units, where `W_step` is the most work between two checks:
     /// one expansion or one rewiring visit. Both are `O(N + e_max / cell)`: an expansion does
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
     /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N)
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
-    /// parent candidates, with `connect` up to 32 steps), each `2 + 2 e / cell` units at
-    /// most (`e` the longer of `e_max` and `e_search`; a meet, connect or shortcut segment at
-    /// most `2 + (width + height) / cell`), with `rewire_new` up to 64 rewires around the new
-    /// node and with `path_shortcuts` that many rewires on the path; a rewiring visit tests at
+    /// parent candidates, and in the tuned profile the greedy connection's up to 32 steps),
+    /// each `2 + 2 e / cell` units at most (`e` the longer of `e_max` and `e_search`; a meet,
+    /// connect or shortcut segment at most `2 + (width + height) / cell`), in the tuned
+    /// profile up to 64 rewires around the new node, and with `path_shortcuts` that many
+    /// rewires on the path; a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). Measured
     /// (`host-sim frozen`, Bi-AM-RRT*(D) on the reference maps, N = 8192): calls ended within
     /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about
@@ -524,7 +524,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         // The call's budget starts now: anchoring and following the agent spend it too, and
         // they come first, so nothing but the final check runs after the last expansion.
-        self.call = Deadline::after(clock, self.cfg.t_exp);
+        self.call = Deadline::after(clock, self.cfg.budget.t_exp);
         self.deferred = false;
         let meter = self.meter(clock);
         let trapped = self.map.obstacles().contains(agent);
@@ -550,7 +550,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// stands still (bounded as [`Planner::plan`]). The waypoint is the root, unchecked: no
     /// agent position is given.
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
-        self.call = Deadline::after(clock, self.cfg.t_exp);
+        self.call = Deadline::after(clock, self.cfg.budget.t_exp);
         let meter = self.meter(clock);
         let expansions = self.expand_for(&meter, None, &mut false);
         self.keep_rate(&meter, clock);
@@ -558,14 +558,14 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// The call's meter (set after the call's deadline, whose reading it may pace against):
-    /// the work cap, and the clock readings of [`Config::clock_every`] and
-    /// [`Config::clock_every_max`].
+    /// the work cap, and the clock readings of the budget's `clock_every` and
+    /// `clock_every_max` ([`Config::budget`]).
     fn meter<'c, C: Clock + ?Sized>(&self, clock: &'c C) -> Meter<'c, C> {
         let (tps, rate) = self.rate;
         let same_clock = tps == clock.ticks_per_second();
-        Meter::with_cap(clock, self.cfg.max_work_per_call as u64)
-            .reading_every(self.cfg.clock_every)
-            .paced(self.cfg.clock_every_max, self.call.start())
+        Meter::with_cap(clock, self.cfg.budget.max_work as u64)
+            .reading_every(self.cfg.budget.clock_every)
+            .paced(self.cfg.budget.clock_every_max, self.call.start())
             .expecting(if same_clock { rate } else { (0, 0) })
     }
 
@@ -594,13 +594,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // the goal joins, or rewiring changes the first edge): the steps leave time for that
         // (when the budget allows, `Meter::reserving`).
         let root = self.root_position();
-        let pending = follow.is_some_and(|a| a.dist(root) <= self.cfg.e_max / 10.0);
+        let pending = follow.is_some_and(|a| a.dist(root) <= self.cfg.search.e_max / 10.0);
         let steps = if pending {
             meter.reserving(self.reroot_nodes().saturating_mul(2), call)
         } else {
             call
         };
-        while expansions < self.cfg.max_expansions_per_call && !meter.expired(&steps) {
+        while expansions < self.cfg.budget.max_expansions && !meter.expired(&steps) {
             let joined = self.goal_node().is_some();
             self.step(meter, steps);
             expansions = expansions.saturating_add(1);
@@ -682,7 +682,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // Candidates: nodes within e_max, cheapest first (edges crossing a circle last), joined
         // to the agent past the map.
         let mut near = Near::new();
-        self.fwd.nearby(agent, self.cfg.e_max, &mut near, meter);
+        self.fwd
+            .nearby(agent, self.cfg.search.e_max, &mut near, meter);
         let circles = self.map.obstacles();
         let crosses = |id: NodeId| circles.blocks_segment(self.fwd.pos(id), agent);
         let key = |id: NodeId| {
@@ -738,9 +739,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
-    /// Re-roots at the path's next node when the agent has reached the root; with
-    /// [`Config::root_step`], on past nodes the agent already stands on (a short edge would
-    /// hold it for a call), at most [`FOLLOW_STEPS`] nodes per call.
+    /// Re-roots at the path's next node when the agent has reached the root; with a root
+    /// step ([`Config::rewiring`]), on past nodes the agent already stands on (a short edge
+    /// would hold it for a call), at most [`FOLLOW_STEPS`] nodes per call.
     ///
     /// A step starts only when it ends before `by` ([`Meter::affords`]): the call's deadline
     /// once the call has expanded, never at its start, where following is the progress every
@@ -751,7 +752,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         meter: &Meter<'_, C>,
         by: Deadline,
     ) -> bool {
-        let steps = if self.cfg.root_step > 0.0 {
+        let steps = if self.cfg.rewiring.root_step > 0.0 {
             FOLLOW_STEPS
         } else {
             1
@@ -774,7 +775,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         by: Deadline,
     ) -> bool {
         let root = self.root_position();
-        if agent.dist(root) > self.cfg.e_max / 10.0 {
+        if agent.dist(root) > self.cfg.search.e_max / 10.0 {
             return false;
         }
         // With a root step (tuned), the root moves only along a path to the goal: towards
@@ -785,7 +786,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // become the ones recycled).
         let stuck = self.fwd.tree.is_full()
             && self.stats.expansions >= (N as u64).saturating_mul(STUCK_EXPANSIONS);
-        if self.cfg.root_step > 0.0 && self.goal_node().is_none() && !stuck {
+        if self.cfg.rewiring.root_step > 0.0 && self.goal_node().is_none() && !stuck {
             return false;
         }
         let Some(end) = self.path_end(meter) else {
@@ -816,7 +817,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // anytime shortcuts may not have reached yet (a goal that joins in a call leaves its
         // first edges as the search made them).
         let next = match after {
-            Some(n2) if self.cfg.path_shortcuts > 0 && self.shortcut_from_root(n2, meter) => n2,
+            Some(n2)
+                if self.cfg.rewiring.path_shortcuts > 0 && self.shortcut_from_root(n2, meter) =>
+            {
+                n2
+            }
             _ => next,
         };
         let next = self.split_long_edge(next, meter);
@@ -860,8 +865,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.fwd.try_rewire(&env, root, node, meter)
     }
 
-    /// [`Config::root_step`]: when the edge from the root to the path's next node `next` is
-    /// longer than the step, a node that far along it becomes the next waypoint instead, so
+    /// The root step ([`Config::rewiring`]): when the edge from the root to the path's next
+    /// node `next` is longer than the step, a node that far along it becomes the next waypoint instead, so
     /// a goal that changes never finds the agent bound to a root far away. The edge was
     /// free, so are its parts. Returns the node to re-root at: `next` when the edge is short,
     /// the step 0, or the arena has no slot to give.
@@ -870,7 +875,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             return next;
         };
         let (a, b) = (self.fwd.pos(root), self.fwd.pos(next));
-        let step = self.cfg.root_step;
+        let step = self.cfg.rewiring.root_step;
         if step <= 0.0 || a.dist(b) <= step {
             return next;
         }
@@ -906,7 +911,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         budget: core::time::Duration,
         call: Deadline,
     ) -> Slice {
-        let visits = match self.cfg.rewire_mode {
+        let visits = match self.cfg.rewiring.mode {
             RewireMode::Faithful => u32::MAX,
             RewireMode::PerExpansion { visits } => visits as u32,
         };
@@ -946,24 +951,26 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call,
         };
         let searching = self.goal.is_some_and(|g| g.node.is_none());
-        if self.cfg.rewire_while_searching || !searching {
-            let slice = self.slice(meter, self.cfg.t_root, call);
+        // Tuned: no root rewiring before the goal joins (the same first paths, less work).
+        let tuned = self.cfg.profile.is_tuned();
+        if !tuned || !searching {
+            let slice = self.slice(meter, self.cfg.rewiring.t_root, call);
             self.fwd
                 .rewire_root(&env, slice, self.cfg.new_rewiring, meter);
         }
         match (self.cfg.base, self.goal) {
             (Base::RtRrt, _) => {
-                let slice = self.slice(meter, self.cfg.t_goal, call);
+                let slice = self.slice(meter, self.cfg.rewiring.t_goal, call);
                 self.fwd.rewire_random(&env, slice, meter);
             }
             (Base::AmRrt, Some(goal)) if goal.node.is_some() => {
-                let slice = self.slice(meter, self.cfg.t_goal, call);
+                let slice = self.slice(meter, self.cfg.rewiring.t_goal, call);
                 self.fwd.rewire_goal(&env, &goal, slice, false, meter);
                 if self.cfg.new_rewiring {
-                    let slice = self.slice(meter, self.cfg.t_goal, call);
+                    let slice = self.slice(meter, self.cfg.rewiring.t_goal, call);
                     self.fwd.rewire_goal(&env, &goal, slice, true, meter);
                 }
-                if let (Some(g), n @ 1..) = (goal.node, self.cfg.path_shortcuts) {
+                if let (Some(g), n @ 1..) = (goal.node, self.cfg.rewiring.path_shortcuts) {
                     self.fwd.shortcut_path(&env, g, n, meter);
                 }
             }
@@ -982,14 +989,14 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             {
                 self.connect(b, false, &blocked, meter);
             }
-            if self.rev_goal.is_some() && self.cfg.rewire_while_searching {
+            if self.rev_goal.is_some() && !tuned {
                 let env = Env {
                     map: &self.map,
                     metric: &self.metric,
                     cfg: &self.cfg,
                     call,
                 };
-                let slice = self.slice(meter, self.cfg.t_root, call);
+                let slice = self.slice(meter, self.cfg.rewiring.t_root, call);
                 self.rev
                     .rewire_root(&env, slice, self.cfg.new_rewiring, meter);
             }
@@ -1012,9 +1019,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
-    /// With [`Config::connect`]: the other tree walks straight towards node `new` of one tree
-    /// (`forward` tells which), and the two are grafted when it reaches it (module docs).
-    /// `blocked`: nodes of the other tree whose segment to `new` the meet test found blocked.
+    /// Tuned profile: the other tree walks straight towards node `new` of one tree (`forward`
+    /// tells which), and the two are grafted when it reaches it (module docs). `blocked`:
+    /// nodes of the other tree whose segment to `new` the meet test found blocked (not
+    /// tested again).
     fn connect<C: Clock + ?Sized>(
         &mut self,
         new: NodeId,
@@ -1022,7 +1030,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         blocked: &[NodeId],
         meter: &Meter<'_, C>,
     ) {
-        if !self.cfg.connect {
+        if !self.cfg.profile.is_tuned() {
             return;
         }
         let env = Env {
@@ -1032,7 +1040,6 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call: self.call,
         };
         let step = self.cfg.search_step();
-        let blocked = if self.cfg.reuse_tests { blocked } else { &[] };
         let pair = if forward {
             let p = self.fwd.pos(new);
             self.rev
@@ -1079,7 +1086,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         };
         let p = this.pos(new);
         let c_new = this.cost(new);
-        let sigma = self.cfg.sigma;
+        let sigma = self.cfg.search.sigma;
         // The MEET_PAIRS cheapest candidates, kept sorted by total cost.
         let mut best: heapless::Vec<(Cost, NodeId), MEET_PAIRS> = heapless::Vec::new();
         let mut seen = 0u32;
@@ -1112,8 +1119,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             .iter()
             .find(|(_, id)| env.free(p, other.pos(*id), meter))
             .map(|&(_, id)| id);
-        // The paper's Meet: any pair within sigma with a free segment (Config::meet_all_pairs).
-        if partner.is_none() && self.cfg.meet_all_pairs && best.is_full() {
+        // The paper's Meet: any pair within sigma with a free segment (AsPrinted::meet_all_pairs).
+        if partner.is_none() && self.cfg.as_printed.meet_all_pairs && best.is_full() {
             let call = self.call;
             let _ = other
                 .index
@@ -1180,9 +1187,6 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
             parent = keep[0];
         }
-        if self.cfg.keep_reverse_branches {
-            return self.graft_whole(parent, b, meter);
-        }
         meter.charge(units(depth).saturating_mul(4));
         let mut blocked = false; // the meeting segment was tested free
         let mut v = Some(b);
@@ -1199,82 +1203,6 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             goal.node = Some(parent);
         }
         true
-    }
-
-    /// The whole reverse tree below forward node `a`, re-rooted at `b` (the meeting node):
-    /// after re-rooting, every trunk node's first child is the next trunk node, so a preorder
-    /// copy takes the trunk (and the goal) first, then the branches while the arena has room.
-    /// The walk needs no stack: it climbs the copy in step with the original. The caller has
-    /// made room for the trunk.
-    fn graft_whole<C: Clock + ?Sized>(
-        &mut self,
-        a: NodeId,
-        b: NodeId,
-        meter: &Meter<'_, C>,
-    ) -> bool {
-        let goal_r = self.rev.tree.root();
-        meter.charge(units(N / 8));
-        if self.rev.tree.set_root(b).is_err() {
-            return false;
-        }
-        let Ok(mut cur_f) = self.fwd.insert(self.rev.pos(b), a, false) else {
-            return false;
-        };
-        let mut cur_r = b;
-        let mut goal_f = (goal_r == Some(b)).then_some(cur_f);
-        let mut copied: usize = 1;
-        // Each node is entered once and left once: at most 2 * len steps.
-        'walk: for _ in 0..self.rev.tree.len().saturating_mul(2) {
-            // Down to the first child, or along to the next sibling (climbing as needed).
-            let (next_r, parent_f) = match self.rev.tree.first_child(cur_r) {
-                Some(c) => (c, cur_f),
-                None => {
-                    // Climb (at most the tree's depth) to the first ancestor with a next sibling.
-                    let mut along = None;
-                    for _ in 0..self.rev.tree.len() {
-                        if cur_r == b {
-                            break;
-                        }
-                        if let Some(s) = self.rev.tree.next_sibling(cur_r) {
-                            along = Some((s, self.fwd.tree.parent(cur_f).unwrap_or(a)));
-                            break;
-                        }
-                        match (self.rev.tree.parent(cur_r), self.fwd.tree.parent(cur_f)) {
-                            (Some(pr), Some(pf)) => (cur_r, cur_f) = (pr, pf),
-                            _ => break,
-                        }
-                    }
-                    match along {
-                        Some(next) => next,
-                        None => break 'walk,
-                    }
-                }
-            };
-            let blocked = self.rev.tree.edge_blocked(next_r).unwrap_or(false);
-            let Ok(f) = self.fwd.insert(self.rev.pos(next_r), parent_f, blocked) else {
-                break; // the arena is full: the branches not copied yet stay behind
-            };
-            (cur_r, cur_f) = (next_r, f);
-            copied = copied.saturating_add(1);
-            if Some(next_r) == goal_r {
-                goal_f = Some(f);
-            }
-        }
-        meter.charge(units(copied).saturating_mul(4));
-        match (goal_f, self.goal.as_mut()) {
-            (Some(g), Some(goal)) => {
-                goal.node = Some(g);
-                true
-            }
-            _ => {
-                // Not reached (the caller made room for the trunk, so this is defensive): the
-                // reverse tree goes back to its root at the goal and keeps growing.
-                if let Some(r) = goal_r {
-                    let _ = self.rev.tree.set_root(r);
-                }
-                false
-            }
-        }
     }
 }
 
@@ -1299,7 +1227,7 @@ mod tests {
         for all in [false, true] {
             let mut storage = Storage::<64, 16>::new();
             let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(40.0);
-            cfg.meet_all_pairs = all;
+            cfg.as_printed.meet_all_pairs = all;
             let rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
             let mut p = Planner::<_, _, 64, 16, 0>::new(
                 &mut storage,

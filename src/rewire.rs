@@ -46,7 +46,7 @@
 //!   test with "or" read as "and"). Measured one at a time at the paper's pace, 25 seeds
 //!   (`docs/results-printed.md`): none moves a path length, search time or node count
 //!   outside seed noise. The goal queue's order was a bug (fixed: first in, first out).
-//! - **Path shortcuts** (tuned configurations, [`crate::Config::path_shortcuts`]; not in the
+//! - **Path shortcuts** (tuned, [`crate::config::Rewiring::path_shortcuts`]; not in the
 //!   paper): a cursor walks the path from the goal towards the root, a few nodes per
 //!   expansion, and offers each node its grandparent as parent (Theta*'s any-angle step, Nash
 //!   et al. 2007): the path straightens between the tree's corner nodes.
@@ -134,7 +134,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         }
     }
 
-    /// Path shortcuts ([`Config::path_shortcuts`], module docs): up to `tests` nodes of the
+    /// Path shortcuts ([`crate::config::Rewiring::path_shortcuts`], module docs): up to `tests` nodes of the
     /// path to `goal`, from where the last call stopped, each offered its grandparent as
     /// parent (kept while it shortens the path, as Theta* does); back to the goal after the
     /// root.

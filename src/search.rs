@@ -6,30 +6,28 @@
 //!
 //! - Sampling: [`crate::sample`]; with `p_beacon` (tuned), once the goal is joined, a share of
 //!   the samples falls in the `e_max` disc around a node of the current path instead
-//!   (RRT*-Smart's beacons); with `dense_beacons` (off in both named sets) such a state
-//!   joins whatever the density around it.
-//! - RRT-Connect's greedy step (`TreeStore::connect`, tuned `connect`): the planner makes
-//!   the other tree walk straight towards a new node that met nothing within `sigma`.
+//!   (RRT*-Smart's beacons).
+//! - RRT-Connect's greedy step (`TreeStore::connect`, tuned profile): the planner makes the
+//!   other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
 //!   is Euclidean; otherwise the node nearest by the assisting metric (a scan of the tree; the
-//!   Euclidean nearest if the metric cannot place `x`). With `nearest_step` (tuned) only the
-//!   steering step towards `x` is tested, and with `reuse_tests` (tuned) the steering takes
-//!   that step, and the parent choice that segment, without testing them again.
+//!   Euclidean nearest if the metric cannot place `x`). In the tuned profile only the
+//!   steering step towards `x` is tested, and the steering takes that step, and the parent
+//!   choice that segment, without testing them again.
 //! - Steering: a step of at most `e_max` along the segment when it is free (`e_search` instead
 //!   while the tree's goal is not in it, when a tuned configuration sets it). Otherwise AM-RRT*
 //!   with a non-Euclidean metric draws `steer_candidates` states in the disc of radius
-//!   `min(e_max, d_E)` around the nearest node (independently, or with `steer_fan` (tuned)
-//!   spread evenly in angle, [`crate::geometry::DiscFan`]) and keeps the free one closest to the sample by
+//!   `min(e_max, d_E)` around the nearest node (independently, or in the tuned profile spread
+//!   evenly in angle, [`crate::geometry::DiscFan`]) and keeps the free one closest to the sample by
 //!   the metric (a fixed number of candidates instead of the reference's fixed 2 ms, so a fast
 //!   implementation does not pay milliseconds per sample; candidates are ranked by the metric
 //!   and their segments tested in that order, which picks the same one with fewer segment
 //!   tests); AM-RRT*(E) steps towards the first
 //!   obstacle and stops short of it (bisection of the free prefix); RT-RRT* gives up.
 //! - The node is added when the neighbourhood holds fewer than `n_max` nodes, or the sample was
-//!   farther than `e_max` from its nearest node, or the new state is the goal. With
-//!   `rewire_new` (tuned), a node added inside the informed ellipse then offers itself as
-//!   parent to its neighbours, as RRT* does. With `density_trades` (tuned), a state the
-//!   rule turns away inside the ellipse instead takes the slot of the neighbourhood's leaf
+//!   farther than `e_max` from its nearest node, or the new state is the goal. In the tuned
+//!   profile, a node added inside the informed ellipse then offers itself as parent to its
+//!   neighbours, as RRT* does, and a state the rule turns away inside the ellipse instead takes the slot of the neighbourhood's leaf
 //!   with the highest `Cost(x) + d_E(x, goal)` when that is above the new state's own bound:
 //!   the nodes move to where they can shorten the path, and since a neighbourhood's bounds
 //!   only decrease, trades cannot cycle.
@@ -74,7 +72,7 @@ use rand_core::Rng;
 /// Most neighbours one `Nearby` query hands to the planner (more are counted, not used).
 pub const NEAR_CAP: usize = 64;
 
-/// Most nodes one greedy connection (RRT-Connect's step, [`Config::connect`]) adds.
+/// Most nodes one greedy connection (RRT-Connect's step, tuned profile) adds.
 pub const CONNECT_STEPS: usize = 32;
 
 /// States turned away by the density rule in a row, while a tree's goal is not in it, after
@@ -92,9 +90,9 @@ const STEER_BATCH_U16: u16 = 32;
 /// The neighbour list type.
 pub(crate) type Near = heapless::Vec<NodeId, NEAR_CAP>;
 
-/// What a new state offers a full arena ([`Config::recycle_when_full`]): a leaf may give up
+/// What a new state offers a full arena (the tuned profile): a leaf may give up
 /// its slot when its cost bound is above `bound` and at least `cover` other nodes (capped by
-/// [`TreeStore::cover`]) share its index bucket ([`Config::recycle_cover`]).
+/// [`TreeStore::cover`]) share its index bucket ([`crate::config::Memory::recycle_cover`]).
 pub(crate) struct Trade {
     bound: Cost,
     cover: u16,
@@ -131,7 +129,7 @@ pub struct TreeStore<const N: usize, const B: usize> {
     pub(crate) goal_stack: NodeStack<SWEEP_CAP>,
     /// Goal rewiring's queue; RT-RRT*'s random-rewiring queue.
     pub(crate) goal_queue: NodeQueue<SWEEP_CAP>,
-    /// Where the path shortcuts ([`Config::path_shortcuts`]) go on (`None`: at the goal).
+    /// Where the path shortcuts ([`crate::config::Rewiring::path_shortcuts`]) go on (`None`: at the goal).
     pub(crate) shortcut_at: Option<NodeId>,
     /// States the density rule turned away in a row while the tree's goal is not in it
     /// (saturating): from [`STARVING`] on, the tree is starving (module docs).
@@ -300,13 +298,14 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
     /// The `Nearby` radius: `e_max` for AM-RRT*; RT-RRT*'s shrinking
     /// `max(sqrt(area * n_max / (pi * n)), e_max)`.
     pub fn radius(&self, nodes: usize) -> f32 {
-        let e = self.cfg.e_max;
+        let e = self.cfg.search.e_max;
         match self.cfg.base {
             Base::AmRrt => e,
             Base::RtRrt => {
                 let area = self.map.grid().width_m() * self.map.grid().height_m();
                 let r = crate::geometry::sqrt(
-                    area * self.cfg.n_max as f32 / (core::f32::consts::PI * nodes.max(1) as f32),
+                    area * self.cfg.memory.n_max as f32
+                        / (core::f32::consts::PI * nodes.max(1) as f32),
                 );
                 r.max(e)
             }
@@ -344,7 +343,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// `Nearest(T, x)`, and whether the step of length `step` from it towards `x` is known to
-    /// be free: with `step` (and [`Config::nearest_step`]) the Euclidean-nearest node's view
+    /// be free: with `step` (the tuned profile) the Euclidean-nearest node's view
     /// is tested over that step only (module docs).
     fn nearest_for_step<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -394,8 +393,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// Steers from node `from` towards `x` (module docs); `None` when no state can be reached.
-    /// `step_free`: the straight step was already tested free ([`Config::nearest_step`],
-    /// [`Config::reuse_tests`]).
+    /// `step_free`: the straight step was already tested free (tuned profile).
     #[allow(clippy::too_many_arguments)]
     fn steer<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -439,11 +437,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let radius = e_max.min(a.dist(x));
         let to = env.metric.prepare(x);
         let mut best: Option<(Point, f32)> = None;
-        let mut left = env.cfg.steer_candidates;
+        let mut left = env.cfg.search.steer_candidates;
         let mut fan = env
             .cfg
-            .steer_fan
-            .then(|| DiscFan::new(rng, a, radius, env.cfg.steer_candidates));
+            .profile
+            .is_tuned()
+            .then(|| DiscFan::new(rng, a, radius, env.cfg.search.steer_candidates));
         while left > 0 {
             let n = left.min(STEER_BATCH_U16);
             left = left.saturating_sub(n);
@@ -540,7 +539,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             // A new node near the goal, or no new node at all (the sample was a duplicate or
             // the neighbourhood was dense): try to connect the goal to the tree directly, so
             // neither the duplicate test nor the density rule can keep it out.
-            Some((id, false)) if self.pos(id).dist(t.pos) > env.cfg.e_max => None,
+            Some((id, false)) if self.pos(id).dist(t.pos) > env.cfg.search.e_max => None,
             _ => self.join(env, rng, t, meter, &mut grown.full),
         };
         if let Some(g) = joined {
@@ -567,7 +566,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         if d2 < env.duplicate_sq() {
             return Some(q);
         }
-        let e_max = env.cfg.e_max;
+        let e_max = env.cfg.search.e_max;
         if d2 > e_max * e_max {
             return None;
         }
@@ -589,6 +588,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         full: &mut bool,
     ) -> Option<(NodeId, bool)> {
         let cfg = env.cfg;
+        let tuned = cfg.profile.is_tuned();
         let view = target.as_deref().map(|t| self.goal_view(env, t, meter));
         let beacon = match (target.as_deref(), &view) {
             (Some(t), Some(v)) if v.ellipse.is_some() => self.beacon_sample(env, rng, t, meter),
@@ -600,9 +600,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 rng,
                 env.map,
                 view.as_ref(),
-                cfg.p_goal,
-                cfg.p_uniform,
-                cfg.sample_attempts,
+                cfg.search.p_goal,
+                cfg.search.p_uniform,
+                cfg.search.sample_attempts,
             )?,
         };
         meter.charge(4);
@@ -617,22 +617,16 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let step = if searching {
             cfg.search_step()
         } else {
-            cfg.e_max
+            cfg.search.e_max
         };
+        // Tuned: `Nearest` tests its Euclidean choice over the step only, and no segment is
+        // tested twice in an expansion (the steering's step, the parent's segment).
         let (x_nearest, step_free) =
-            self.nearest_for_step(env, x_rand, cfg.nearest_step.then_some(step), meter)?;
+            self.nearest_for_step(env, x_rand, tuned.then_some(step), meter)?;
         if meter.expired(&env.call) {
             return None;
         }
-        let x_new = self.steer(
-            env,
-            rng,
-            x_nearest,
-            x_rand,
-            step,
-            step_free && cfg.reuse_tests,
-            meter,
-        )?;
+        let x_new = self.steer(env, rng, x_nearest, x_rand, step, step_free && tuned, meter)?;
         if meter.expired(&env.call) {
             return None;
         }
@@ -651,31 +645,30 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         if meter.expired(&env.call) {
             return None;
         }
-        let far_sample = self.pos(x_nearest).dist(x_rand) > cfg.e_max;
+        let far_sample = self.pos(x_nearest).dist(x_rand) > cfg.search.e_max;
         // Denser where a node can still shorten the path (tuned configurations).
         let informed = view
             .as_ref()
             .and_then(|v| v.ellipse)
             .is_some_and(|e| e.contains(x_new));
         let n_max = if informed {
-            cfg.n_max.max(cfg.n_max_informed)
+            cfg.memory.n_max.max(cfg.memory.n_max_informed)
         } else {
-            cfg.n_max
+            cfg.memory.n_max
         };
-        let exempt = beacon.is_some() && cfg.dense_beacons;
         // A starving search (liveness): a state in a hole of the cover the rule aims at (no
         // node within `e_max / sqrt(n_max)`, the spacing of `n_max` nodes spread over an
         // `e_max` disc) is let in, so no region whose way out is narrow stays closed.
-        let spacing = cfg.e_max / crate::geometry::sqrt(f32::from(n_max.max(1)));
+        let spacing = cfg.search.e_max / crate::geometry::sqrt(f32::from(n_max.max(1)));
         let hole = searching && self.refused >= STARVING && nearest_sq > spacing * spacing;
-        let room = found < n_max as usize || far_sample || is_goal || exempt;
+        let room = found < n_max as usize || far_sample || is_goal;
         let by_hole = hole && !room;
         let dense = !room && !hole;
         // A dense neighbourhood inside the ellipse may still trade (tuned): its worst leaf
         // for a state that bounds a shorter path.
         let swap = match (&view, target.as_deref()) {
-            (Some(v), Some(t)) if dense && informed && cfg.density_trades => {
-                let cover = self.cover(cfg.recycle_cover);
+            (Some(v), Some(t)) if dense && informed && tuned => {
+                let cover = self.cover(cfg.memory.recycle_cover);
                 self.worst_leaf(&near, x_new, v.goal, t.node, cover, meter)
             }
             _ => None,
@@ -692,7 +685,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // Keep x_nearest a candidate even when the list was truncated.
         keep_candidate(&mut near, x_nearest);
         // The steering's segment from x_nearest is known free.
-        let seen = cfg.reuse_tests.then_some(x_nearest);
+        let seen = tuned.then_some(x_nearest);
         let parent = self.best_parent(env, x_new, &mut near, seen, meter)?;
         // The new state's cost bound below `parent`: a lower bound of a path through it.
         let bound = |s: &Self, goal: Point| {
@@ -716,9 +709,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
             // A full tree may trade a leaf for a state that can shorten the path (tuned).
             (_, _, target) => {
-                let trade = (cfg.recycle_when_full && informed).then(|| Trade {
+                let trade = (tuned && informed).then(|| Trade {
                     bound: bound(self, view.as_ref().map_or(x_new, |v| v.goal)),
-                    cover: cfg.recycle_cover,
+                    cover: cfg.memory.recycle_cover,
                 });
                 self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?
             }
@@ -727,7 +720,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // cheaper over a free segment (tuned configurations, inside the informed ellipse). A
         // trade may have renamed one of `near`'s ids; `try_rewire` checks cost and segment of
         // whatever node an id now names, so that is at worst a wasted test.
-        if cfg.rewire_new && informed {
+        if tuned && informed {
             for &nb in near.iter() {
                 if meter.expired(&env.call) {
                     break;
@@ -746,7 +739,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         Some((id, is_goal))
     }
 
-    /// RRT-Connect's greedy step ([`Config::connect`]): from the node nearest `x`, straight
+    /// RRT-Connect's greedy step (tuned profile): from the node nearest `x`, straight
     /// steps of at most `step` towards `x`, each added below the last when its segment is free,
     /// until a node within `step` of `x` sees it over a free segment (returned), or a step is
     /// blocked, the arena is full or [`CONNECT_STEPS`] nodes were added (`None`; the nodes
@@ -779,7 +772,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         None
     }
 
-    /// With probability [`Config::p_beacon`] (no draw at all when it is 0): a free state in the
+    /// With probability [`crate::config::Search::p_beacon`] (no draw at all when it is 0): a free state in the
     /// `e_max` disc around a uniformly chosen node of the path to the joined goal.
     fn beacon_sample<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -788,7 +781,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         target: &Target,
         meter: &Meter<'_, C>,
     ) -> Option<Point> {
-        let p = env.cfg.p_beacon;
+        let p = env.cfg.search.p_beacon;
         if p <= 0.0 || unit_f32(rng) >= p {
             return None;
         }
@@ -799,7 +792,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             b = self.tree.parent(b)?;
         }
         meter.charge(units(depth).saturating_add(4));
-        let s = sample_disc(rng, self.pos(b), env.cfg.e_max);
+        let s = sample_disc(rng, self.pos(b), env.cfg.search.e_max);
         env.map.free_point(s).then_some(s)
     }
 
@@ -808,7 +801,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// room: one not joined yet (promise: a goal that can be reached joins) or joined over a
     /// path that crosses a dynamic obstacle (the tree must grow a way around). Once a free
     /// path exists, a full tree rewires what it has, unless `trade` gives the new state's cost
-    /// bound: then a leaf with a higher bound makes room ([`Config::recycle_when_full`]). Sets
+    /// bound: then a leaf with a higher bound makes room (the tuned profile). Sets
     /// `full` when the arena was full.
     #[allow(clippy::too_many_arguments)]
     fn insert_making_room<R: Rng + ?Sized, C: Clock + ?Sized>(
@@ -948,7 +941,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// The leaf of `near` (not the root, not `goal_node`, not one of the last `cover` nodes of
     /// its index bucket) with the highest cost bound `Cost(x) + d_E(x, goal)`, with that
     /// bound, when it is above the best bound `x` could have below any node of `near`
-    /// (`Config::density_trades`).
+    /// (tuned profile).
     fn worst_leaf<C: Clock + ?Sized>(
         &self,
         near: &Near,
@@ -1110,7 +1103,7 @@ mod tests {
         let meter = Meter::new(&clock);
         for candidates in [1u16, 7, 24, 32, 33, 70] {
             let mut cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
-            cfg.steer_candidates = candidates;
+            cfg.search.steer_candidates = candidates;
             let env = Env {
                 map: &map,
                 metric: &Manhattan,
@@ -1192,7 +1185,7 @@ mod tests {
         assert_eq!(got, Some(a.step_towards(x, 3.0)));
     }
 
-    /// Beacon samples ([`Config::p_beacon`]) fall within `e_max` of a node of the path to the
+    /// Beacon samples ([`crate::config::Search::p_beacon`]) fall within `e_max` of a node of the path to the
     /// goal, near every one of them over many draws; with `p_beacon` 0 nothing is drawn.
     #[test]
     fn beacon_samples_fall_near_the_path() {
@@ -1220,7 +1213,7 @@ mod tests {
         let meter = Meter::new(&clock);
         let paper = Config::bi_am_rrt(crate::MetricKind::Euclidean);
         let mut cfg = paper;
-        cfg.p_beacon = 1.0;
+        cfg.search.p_beacon = 1.0;
         let env_paper = Env {
             map: &map,
             metric: &crate::metric::Euclidean,
@@ -1244,7 +1237,7 @@ mod tests {
                 continue;
             };
             let i = (0..4)
-                .find(|&i| p.dist(path[i]) <= cfg.e_max)
+                .find(|&i| p.dist(path[i]) <= cfg.search.e_max)
                 .expect("within e_max of a path node");
             near[i] += 1;
         }

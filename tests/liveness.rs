@@ -150,7 +150,7 @@ fn regression_case_2_a_room_with_narrow_exits_does_not_starve_the_tree() {
     ] {
         for (lengths, cfg) in [("paper", named), ("map", named.for_grid(&grid))] {
             let mut cfg = cfg;
-            cfg.t_exp = Duration::from_millis(20);
+            cfg.budget.t_exp = Duration::from_millis(20);
             for seed in 1..=3 {
                 let (joined, nodes, admits) = calls_to_join::<2048, 1024>(
                     grid,
@@ -196,14 +196,14 @@ fn regression_case_3_a_full_arena_still_joins() {
         Config::am_rrt(MetricKind::Euclidean).tuned(),
     ] {
         let mut cfg = named.with_sigma(s.sigma);
-        cfg.t_exp = Duration::from_millis(2);
+        cfg.budget.t_exp = Duration::from_millis(2);
         let (start, goal) = (Point::new(5.0, 5.0), Point::new(55.0, 55.0));
         joins_held_and_following::<64, 64>(s.grid, cfg, start, goal, 3);
     }
     let bits = rings_bits();
     let grid = OccupancyGrid::new(&bits, 120, 120, 1.0).unwrap();
     let mut cfg = Config::am_rrt(MetricKind::Euclidean).tuned();
-    cfg.t_exp = Duration::from_millis(20);
+    cfg.budget.t_exp = Duration::from_millis(20);
     let (start, goal) = (Point::new(60.0, 60.0), Point::new(5.0, 115.0));
     joins_held_and_following::<256, 256>(grid, cfg, start, goal, 2);
 }
@@ -244,7 +244,7 @@ fn a_budget_shorter_than_a_rerooting_still_reaches_the_goal() {
         Config::bi_am_rrt(MetricKind::Euclidean).tuned(),
     ] {
         let mut cfg = named.with_sigma(s.sigma);
-        cfg.t_exp = Duration::from_millis(2);
+        cfg.budget.t_exp = Duration::from_millis(2);
         let mut storage = Box::new(Storage::<2048, 1024>::new());
         let mut planner = Planner::new(
             &mut storage,

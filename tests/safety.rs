@@ -34,7 +34,7 @@ fn planner<'s, M: Metric, const N: usize, const B: usize>(
     seed: u64,
 ) -> Planner<'s, 'static, M, XorShiftRng, N, B, K> {
     let mut cfg = cfg.with_sigma(s.sigma);
-    cfg.t_exp = Duration::from_millis(5);
+    cfg.budget.t_exp = Duration::from_millis(5);
     Planner::new(
         storage,
         Map::new(s.grid),
@@ -221,7 +221,7 @@ fn regression_release_panic_on_an_accepted_huge_map() {
         let grid = OccupancyGrid::new(&BITS, 2, 2, cell).unwrap();
         let mut storage = Box::new(Storage::<64, 8>::new());
         let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
-        cfg.e_max = cell * 0.7;
+        cfg.search.e_max = cell * 0.7;
         let start = Point::new(cell * 0.5, cell * 0.5);
         let goal = Point::new(cell * 1.5, cell * 1.5);
         let made = Planner::<_, _, 64, 8, K>::new(

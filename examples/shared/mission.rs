@@ -55,7 +55,7 @@ pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
     let scenario = &builtin::OPEN;
     let map: Map<'static, 4> = Map::new(scenario.grid);
     let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
-    cfg.t_exp = core::time::Duration::from_millis(20);
+    cfg.budget.t_exp = core::time::Duration::from_millis(20);
     let rng = XorShiftRng::seed_from_u64(1);
     let mut planner = Planner::new(storage, map, Euclidean, rng, cfg, scenario.start).ok()?;
     let clock = FakeClock::nanos().with_work_cost(12).with_step(1);

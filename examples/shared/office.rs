@@ -177,7 +177,7 @@ pub fn exported_mission<C: Clock>(
     let Some(r) = result else {
         return false;
     };
-    let budget = clock.ticks(cfg.t_exp);
+    let budget = clock.ticks(cfg.budget.t_exp);
     let ms = u64::from(core_hz / 1_000);
     let us = u64::from(core_hz / 1_000_000);
     if goals.len() > 1 {
@@ -186,7 +186,7 @@ pub fn exported_mission<C: Clock>(
              {} expansions ({}.{} per call), {} nodes at the end",
             cfg.name(),
             scenario::NAME,
-            cfg.t_exp.as_millis(),
+            cfg.budget.t_exp.as_millis(),
             reached,
             goals.len(),
             travelled,
@@ -203,7 +203,7 @@ pub fn exported_mission<C: Clock>(
              {} collisions, {} nodes at goal, {} nodes at the end, {} plan calls",
             cfg.name(),
             scenario::NAME,
-            cfg.t_exp.as_millis(),
+            cfg.budget.t_exp.as_millis(),
             r.reached,
             search_ms,
             r.travelled,

@@ -40,10 +40,12 @@ pub struct Variant {
 }
 
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
-/// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`, `e_max`,
-/// `n_max`, `n_max_informed`, `clock_every`, `clock_every_max`, `steer_candidates`, `p_goal`, `p_uniform`, `e_search`, `rewire_new`, `connect`, `path_shortcuts`, `p_beacon`,
-/// `recycle_when_full`, `recycle_cover`, `root_step`, `dense_beacons`, `density_trades`, `steer_fan`, `nearest_step`, `reuse_tests`, `rewire_while_searching`, `meet_all_pairs`, `as_printed` (`all` or parts joined by `+`), `faithful`), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in
-/// one run.
+/// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`,
+/// `faithful`, `e_max`, `e_search`, `sigma`, `steer_candidates`, `p_goal`, `p_uniform`,
+/// `p_beacon`, `path_shortcuts`, `root_step`, `clock_every`, `clock_every_max`, `n_max`,
+/// `n_max_informed`, `recycle_cover`, `as_printed` (`all` or parts joined by `+`),
+/// `profile` (`paper` or `tuned`: the tuned profile's changes without its parameters, or the
+/// reverse)), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
     spec.split(',')
         .map(|item| {
@@ -75,36 +77,48 @@ pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
 fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
     use bi_am_rrt::RewireMode;
     match field {
-        "visits" => cfg.rewire_mode = RewireMode::PerExpansion { visits: v.parse()? },
+        "visits" => cfg.rewiring.mode = RewireMode::PerExpansion { visits: v.parse()? },
         "faithful" => {
             if v.parse::<bool>()? {
-                cfg.rewire_mode = RewireMode::Faithful;
+                cfg.rewiring.mode = RewireMode::Faithful;
             }
         }
-        "e_max" => cfg.e_max = v.parse()?,
-        "n_max" => cfg.n_max = v.parse()?,
-        "n_max_informed" => cfg.n_max_informed = v.parse()?,
-        "clock_every" => cfg.clock_every = v.parse()?,
-        "clock_every_max" => cfg.clock_every_max = v.parse()?,
-        "nearest_step" => cfg.nearest_step = v.parse()?,
-        "reuse_tests" => cfg.reuse_tests = v.parse()?,
-        "rewire_while_searching" => cfg.rewire_while_searching = v.parse()?,
-        "steer_candidates" => cfg.steer_candidates = v.parse()?,
-        "p_goal" => cfg.p_goal = v.parse()?,
-        "p_uniform" => cfg.p_uniform = v.parse()?,
-        "e_search" => cfg.e_search = v.parse()?,
-        "rewire_new" => cfg.rewire_new = v.parse()?,
-        "connect" => cfg.connect = v.parse()?,
-        "path_shortcuts" => cfg.path_shortcuts = v.parse()?,
-        "p_beacon" => cfg.p_beacon = v.parse()?,
-        "recycle_when_full" => cfg.recycle_when_full = v.parse()?,
-        "recycle_cover" => cfg.recycle_cover = v.parse()?,
-        "root_step" => cfg.root_step = v.parse()?,
-        "dense_beacons" => cfg.dense_beacons = v.parse()?,
-        "density_trades" => cfg.density_trades = v.parse()?,
-        "steer_fan" => cfg.steer_fan = v.parse()?,
-        "meet_all_pairs" => cfg.meet_all_pairs = v.parse()?,
+        "e_max" => cfg.search.e_max = v.parse()?,
+        "n_max" => cfg.memory.n_max = v.parse()?,
+        "n_max_informed" => cfg.memory.n_max_informed = v.parse()?,
+        "clock_every" => cfg.budget.clock_every = v.parse()?,
+        "clock_every_max" => cfg.budget.clock_every_max = v.parse()?,
+        "steer_candidates" => cfg.search.steer_candidates = v.parse()?,
+        "p_goal" => cfg.search.p_goal = v.parse()?,
+        "p_uniform" => cfg.search.p_uniform = v.parse()?,
+        "e_search" => cfg.search.e_search = v.parse()?,
+        "path_shortcuts" => cfg.rewiring.path_shortcuts = v.parse()?,
+        "p_beacon" => cfg.search.p_beacon = v.parse()?,
+        "recycle_cover" => cfg.memory.recycle_cover = v.parse()?,
+        "root_step" => cfg.rewiring.root_step = v.parse()?,
+        "sigma" => cfg.search.sigma = v.parse()?,
         "as_printed" => cfg.as_printed = crate::experiment::parse_as_printed(v)?,
+        "profile" => {
+            cfg.profile = match v {
+                "paper" => bi_am_rrt::Profile::Paper,
+                "tuned" => bi_am_rrt::Profile::Tuned,
+                _ => return Err(anyhow!("profile {v:?}: paper or tuned")),
+            }
+        }
+        "steer_fan"
+        | "nearest_step"
+        | "reuse_tests"
+        | "rewire_while_searching"
+        | "connect"
+        | "rewire_new"
+        | "recycle_when_full"
+        | "density_trades" => {
+            return Err(anyhow!(
+                "{field:?} is part of the tuned profile since issue 26 (no switch of its own; \
+                 `@profile=paper` turns all of them off; measured one by one in \
+                 docs/performance.md, \"One tuned default\")"
+            ));
+        }
         _ => return Err(anyhow!("unknown field {field:?}")),
     }
     Ok(())
@@ -230,6 +244,12 @@ pub struct BenchRow {
     pub cost_ratio: Vec<Option<f64>>,
     /// Forward tree nodes at the end.
     pub nodes: usize,
+    /// Path cost / optimum at equal time: read at the end of the first `grow` call that ends
+    /// at or after OMPL's RRT-Connect + simplify's median time on the leg in the same run
+    /// (with `--ompl`; `None` without, or when we had no path then).
+    pub equal_ratio: Option<f64>,
+    /// When that reading was taken, in CPU microseconds from `set_goal`.
+    pub equal_us: Option<f64>,
     /// Forward and reverse expansions per CPU second.
     pub expansions_per_s: f64,
     /// Clock readings per expansion.
@@ -263,8 +283,17 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                 continue;
             }
             let opt = optima[k].ok_or_else(|| anyhow!("{} leg {leg}: goal unreachable", s.name))?;
+            let mut equal_at = None;
             if let Some(bin) = &args.ompl {
-                for row in ompl_leg(bin, &args.out, s, leg, start, goal, opt, args)? {
+                let theirs = ompl_leg(bin, &args.out, s, leg, start, goal, opt, args)?;
+                // Equal time: RRT-Connect + simplify's median over seeds on this leg.
+                let mut t: Vec<f64> = theirs
+                    .iter()
+                    .filter(|r| r.planner == OMPL_RRT_CONNECT_SIMPLIFIED)
+                    .map(|r| r.first_us.unwrap_or(f64::INFINITY))
+                    .collect();
+                equal_at = median(&mut t).filter(|t| t.is_finite()).map(|t| t * 1e-6);
+                for row in theirs {
                     writeln!(csv, "{}", csv_line(&row))?;
                     rows.push(row);
                 }
@@ -286,6 +315,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                             &args.budgets[..]
                         },
                         cold: args.cold,
+                        equal_at,
                     };
                     let r = match args.nodes {
                         2048 => run.on(&mut arenas.n2048),
@@ -307,6 +337,8 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                         first_nodes: r.first_nodes,
                         cost_ratio: r.costs.iter().map(|c| c.map(|c| c / opt)).collect(),
                         nodes: r.nodes,
+                        equal_ratio: r.equal.and_then(|e| e.1).map(|c| c / opt),
+                        equal_us: r.equal.map(|e| e.0 * 1e6),
                         expansions_per_s: r.expansions as f64 / r.cpu_s.max(1e-9),
                         reads_per_expansion: r.reads as f64 / (r.expansions.max(1)) as f64,
                         full: r.full,
@@ -420,6 +452,8 @@ fn ompl_leg(
                     first_nodes: None,
                     cost_ratio,
                     nodes: 0,
+                    equal_ratio: None,
+                    equal_us: None,
                     expansions_per_s: 0.0,
                     reads_per_expansion: 0.0,
                     full: false,
@@ -461,6 +495,8 @@ struct Measured {
     first_len: Option<f64>,
     first_nodes: Option<usize>,
     costs: Vec<Option<f64>>,
+    /// The equal-time reading: when, and the path cost then.
+    equal: Option<(f64, Option<f64>)>,
     nodes: usize,
     expansions: u64,
     reads: u64,
@@ -491,6 +527,8 @@ struct Run<'a> {
     goal: bi_am_rrt::Point,
     budgets: &'a [f64],
     cold: bool,
+    /// The equal-time reading's time, in CPU seconds.
+    equal_at: Option<f64>,
 }
 
 impl Run<'_> {
@@ -504,26 +542,35 @@ impl Run<'_> {
             if self.cold {
                 flush_caches();
             }
-            measure(p, self.goal, self.budgets, self.clock)
+            measure(p, self.goal, self.budgets, self.equal_at, self.clock)
         })
     }
 }
 
-/// Grows `planner` towards `goal` until each CPU budget has passed (module docs).
+/// Grows `planner` towards `goal` until each CPU budget has passed (module docs), and reads
+/// the path's cost once more at `equal_at` (the calls then end there as at a budget).
 fn measure<const N: usize>(
     planner: &mut SizedPlanner<'_, '_, N>,
     goal: bi_am_rrt::Point,
     budgets: &[f64],
+    equal_at: Option<f64>,
     kind: BenchClock,
 ) -> Result<Measured> {
     let clock = RunClock::new(kind);
     let t0 = bi_am_rrt::clock::Clock::now(&clock);
     planner.set_goal(goal).map_err(|e| anyhow!("goal: {e}"))?;
     let mut costs = Vec::with_capacity(budgets.len());
+    let mut equal = None;
     let mut full = false;
     let mut first: Option<(f64, f64, usize)> = None;
     let secs = |t: u64| t.saturating_sub(t0) as f64 * 1e-9;
-    for &b in budgets {
+    // The budgets and the equal-time reading, in time order (`true`: the equal-time one).
+    let mut stops: Vec<(f64, bool)> = budgets.iter().map(|&b| (b, false)).collect();
+    if let Some(t) = equal_at.filter(|&t| t <= budgets.last().copied().unwrap_or(0.0)) {
+        stops.push((t, true));
+    }
+    stops.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (b, is_equal) in stops {
         loop {
             let now = secs(bi_am_rrt::clock::Clock::now(&clock));
             if now >= b {
@@ -549,7 +596,11 @@ fn measure<const N: usize>(
             .and_then(|g| planner.tree().cost(g))
             .filter(|c| !c.blocked)
             .map(|c| c.length as f64);
-        costs.push(c);
+        if is_equal {
+            equal = Some((secs(bi_am_rrt::clock::Clock::now(&clock)), c));
+        } else {
+            costs.push(c);
+        }
     }
     let cpu_s = secs(bi_am_rrt::clock::Clock::now(&clock));
     let st = planner.stats();
@@ -558,6 +609,7 @@ fn measure<const N: usize>(
         first_len: first.map(|f| f.1),
         first_nodes: first.map(|f| f.2),
         costs,
+        equal,
         nodes: planner.tree().len(),
         expansions: st.expansions + st.reverse_expansions,
         reads: clock.reads(),
@@ -573,6 +625,7 @@ fn header(budgets: &[f64]) -> String {
     for b in budgets {
         h.push_str(&format!(",cost_ratio_{b}s"));
     }
+    h.push_str(",equal_time_ratio,equal_time_us");
     h
 }
 
@@ -600,6 +653,11 @@ fn csv_line(r: &BenchRow) -> String {
         s.push(',');
         s.push_str(&opt(c.map(|v| format!("{v:.4}"))));
     }
+    s.push_str(&format!(
+        ",{},{}",
+        opt(r.equal_ratio.map(|v| format!("{v:.4}"))),
+        opt(r.equal_us.map(|v| format!("{v:.1}")))
+    ));
     s
 }
 
@@ -801,13 +859,17 @@ pub fn ratios_markdown(rows: &[BenchRow], budgets: &[f64], cold: bool) -> String
     };
     let mut s = format!(
         "Per-leg ratios, ours / OMPL's in the same run ({mode}); median over legs, and the \
-         worst leg (leg: ratio); 0 where OMPL had no path by then, inf where we had none.\n\n| map | planner | first solution / RRT-Connect | first \
-         path / (RRT-Connect + simplify) |"
+         worst leg (leg: ratio); 0 where OMPL had no path by then, inf where we had none. \
+         At equal time: our path when RRT-Connect + simplify had its path (its median time on \
+         the leg; read at the end of our first call ending then or later: the median reading \
+         is given in microseconds after that time) / that simplified path.\n\n| map | \
+         planner | first solution / RRT-Connect | first path / (RRT-Connect + simplify) | \
+         path at equal time / (RRT-Connect + simplify) | read after (us) |"
     );
     for b in budgets {
         s.push_str(&format!(" cost at {b} s / Informed RRT* |"));
     }
-    s.push_str("\n|---|---|---:|---:|");
+    s.push_str("\n|---|---|---:|---:|---:|---:|");
     for _ in budgets {
         s.push_str("---:|");
     }
@@ -835,10 +897,26 @@ pub fn ratios_markdown(rows: &[BenchRow], budgets: &[f64], cold: bool) -> String
             &ours(&|r| r.first_ratio),
             &theirs(OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_ratio),
         );
+        let equal = leg_ratios(
+            &ours(&|r| r.equal_ratio),
+            &theirs(OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_ratio),
+        );
+        // How late our equal-time readings came: per run, after the leg's equal time.
+        let t_eq = leg_medians(rows, &map, OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_us);
+        let mut late: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.map == map && r.planner == planner)
+            .filter_map(|r| {
+                let &(_, t) = t_eq.iter().find(|(l, _)| *l == r.leg)?;
+                Some(r.equal_us? - t)
+            })
+            .collect();
+        let late = median(&mut late).map_or("-".into(), |v| format!("{v:.0}"));
         s.push_str(&format!(
-            "| {map} | {planner} | {} | {} |",
+            "| {map} | {planner} | {} | {} | {} | {late} |",
             cell(first, 2),
-            cell(path, 3)
+            cell(path, 3),
+            cell(equal, 3)
         ));
         for i in 0..budgets.len() {
             let get = move |r: &BenchRow| r.cost_ratio.get(i).copied().flatten();

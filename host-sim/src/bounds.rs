@@ -46,7 +46,7 @@ pub struct FrozenRow {
 /// Frozen-clock calls for `base` on `prep` with 2,048 and 8,192 nodes, in both rewiring modes.
 pub fn frozen(prep: &Prepared, base: Config, calls: u32) -> Result<Vec<FrozenRow>> {
     let mut rows = Vec::new();
-    for mode in [base.rewire_mode, RewireMode::Faithful] {
+    for mode in [base.rewiring.mode, RewireMode::Faithful] {
         let cfg = prep.config(base).with_rewire_mode(mode);
         rows.push(measure::<2048, 1024>(prep, cfg, calls)?);
         rows.push(measure::<8192, 2048>(prep, cfg, calls)?);
@@ -88,7 +88,7 @@ fn measure<const N: usize, const B: usize>(
         map: sc.name.clone(),
         planner: cfg.name().to_string(),
         nodes: N,
-        mode: match cfg.rewire_mode {
+        mode: match cfg.rewiring.mode {
             RewireMode::Faithful => "faithful".into(),
             RewireMode::PerExpansion { visits } => format!("per-expansion({visits})"),
         },
@@ -98,7 +98,7 @@ fn measure<const N: usize, const B: usize>(
         max_cpu_ms: cpu.last().copied().map_or(0.0, ms),
         median_cpu_ms: cpu.get(cpu.len() / 2).copied().map_or(0.0, ms),
         max_expansions: expansions,
-        cap: cfg.max_work_per_call,
+        cap: cfg.budget.max_work,
     })
 }
 

@@ -69,8 +69,6 @@ pub struct ExperimentArgs {
     pub meet_all_pairs: bool,
     /// Fig. 7: radius of a disc dropped on goal 1's path (`--obstacle`).
     pub obstacle: Option<f32>,
-    /// Keep the reverse tree's branches at the meet (`Config::keep_reverse_branches`).
-    pub keep_reverse_branches: bool,
     /// Stop runs once the goal is in the tree.
     pub search_only: bool,
     /// Anytime measurement budget in ms (0: none).
@@ -156,16 +154,13 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
         .map(|c| {
             let mut c = *c;
             if args.faithful {
-                c.rewire_mode = RewireMode::Faithful;
+                c.rewiring.mode = RewireMode::Faithful;
             }
             if let Some(t) = args.t_exp {
-                c.t_exp = t;
-            }
-            if args.keep_reverse_branches {
-                c.keep_reverse_branches = true;
+                c.budget.t_exp = t;
             }
             c.as_printed = args.as_printed;
-            c.meet_all_pairs |= args.meet_all_pairs;
+            c.as_printed.meet_all_pairs |= args.meet_all_pairs;
             if args.pace == crate::results::Pace::Paper {
                 paper_pace(&mut c);
             }
@@ -178,8 +173,8 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
 /// [`PAPER_VISITS`] rewiring visits per phase and expansion (the caller makes every call last
 /// its full `t_exp` on a virtual clock).
 pub fn paper_pace(c: &mut Config) {
-    c.max_expansions_per_call = PAPER_EXPANSIONS_PER_CALL;
-    c.rewire_mode = RewireMode::PerExpansion {
+    c.budget.max_expansions = PAPER_EXPANSIONS_PER_CALL;
+    c.rewiring.mode = RewireMode::PerExpansion {
         visits: PAPER_VISITS,
     };
 }
@@ -211,7 +206,6 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
         as_printed: as_printed_names(args.as_printed),
         meet_all_pairs: args.meet_all_pairs,
         obstacle_m: args.obstacle,
-        keep_reverse_branches: args.keep_reverse_branches,
         search_only: args.search_only,
         anytime_ms: args.anytime_ms,
         t_exp_ms: args.t_exp.map(|d| d.as_secs_f64() * 1e3),
@@ -258,7 +252,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
                 // At the paper's pace every call lasts its full t_exp, as in the paper's
                 // Python: the clock moves on to where the call's budget ends.
                 let paper = args.pace == crate::results::Pace::Paper;
-                let t_exp = clock.ticks(cfg.t_exp);
+                let t_exp = clock.ticks(cfg.budget.t_exp);
                 let call_end = std::cell::Cell::new(clock.peek());
                 drive(p, prep, &clock, &goals, &protocol, |p, gi, a, _| {
                     if paper {
@@ -274,7 +268,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
     })?;
     let anytime = if args.anytime_ms > 0 {
         let mut c = cfg;
-        c.t_exp = Duration::from_millis(args.anytime_ms);
+        c.budget.t_exp = Duration::from_millis(args.anytime_ms);
         with_planner(prep, c, seed, |p| {
             p.set_goal(prep.scenario.goals[0])
                 .map_err(|e| anyhow!("{e}"))?;
@@ -288,7 +282,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         None
     };
     let run_wall_s = wall.elapsed().as_secs_f64();
-    let t_exp = cfg.t_exp.as_secs_f64();
+    let t_exp = cfg.budget.t_exp.as_secs_f64();
     Ok(runs
         .iter()
         .map(|g| {

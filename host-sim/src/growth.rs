@@ -82,12 +82,12 @@ pub fn growth(
         let prep = Prepared::new(sc.clone());
         for base in planners {
             for (mode, rewire) in [
-                ("per-expansion", base.rewire_mode),
+                ("per-expansion", base.rewiring.mode),
                 ("faithful", RewireMode::Faithful),
             ] {
                 let mut cfg = *base;
-                cfg.rewire_mode = rewire;
-                cfg.t_exp = Duration::from_millis(call_ms);
+                cfg.rewiring.mode = rewire;
+                cfg.budget.t_exp = Duration::from_millis(call_ms);
                 with_planner(&prep, cfg, seed, |p| {
                     p.set_goal(sc.goals[0])
                         .map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -51,8 +51,9 @@ enum Command {
         #[arg(long)]
         scenario: Option<String>,
         /// Planner name as in the paper's Table 1 (any case; suffix " tuned" for the tuned
-        /// configuration; `@field=value` overrides as in `bench --planners`).
-        #[arg(long, default_value = "Bi-AM-RRT*(D)")]
+        /// configuration; `@field=value` overrides as in `bench --planners`). The default is
+        /// the tuned planner (`Config::default()`); "Bi-AM-RRT*(D)" is the paper's.
+        #[arg(long, default_value = "Bi-AM-RRT*(D) tuned")]
         planner: String,
         /// Run through every goal of the scenario instead of the first only.
         #[arg(long)]
@@ -116,9 +117,6 @@ enum Command {
         /// Rewiring as the reference (every expansion spends its full t_root/t_goal).
         #[arg(long)]
         faithful: bool,
-        /// Keep the reverse tree's branches when the trees meet (the paper keeps its trunk).
-        #[arg(long)]
-        keep_reverse_branches: bool,
         #[command(flatten)]
         table: TableArgs,
         /// Planning time per call in ms (default: the paper's 150).
@@ -542,7 +540,6 @@ fn main() -> Result<()> {
             seed,
             jobs,
             faithful,
-            keep_reverse_branches,
             table,
             t_exp_ms,
             search_only,
@@ -584,7 +581,6 @@ fn main() -> Result<()> {
                 seed,
                 jobs,
                 faithful,
-                keep_reverse_branches,
                 search_only,
                 anytime_ms,
                 table: table.options(),

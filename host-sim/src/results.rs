@@ -107,8 +107,6 @@ pub struct Settings {
     pub goals: Goals,
     /// Reference-style rewiring budgets.
     pub faithful: bool,
-    /// Reverse tree kept whole at the meet.
-    pub keep_reverse_branches: bool,
     /// Runs stop when the goal joins.
     pub search_only: bool,
     /// Anytime measurement in ms (0: none).

@@ -81,7 +81,7 @@ fn join_scenes(
     mut cfg: bi_am_rrt::Config,
     seed: u64,
 ) -> Result<(Option<Scene>, Option<Scene>)> {
-    cfg.max_expansions_per_call = 1;
+    cfg.budget.max_expansions = 1;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
     with_planner(prep, cfg, seed, |p| {
         p.set_goal(prep.scenario.goals[0])
@@ -112,7 +112,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .context("no planner named")?;
     if let Some(t) = args.t_exp {
         anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");
-        cfg.t_exp = t;
+        cfg.budget.t_exp = t;
     }
     let paper = args.pace == crate::results::Pace::Paper;
     if paper {
@@ -147,7 +147,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
     };
     let leg_starts = crate::optimum::leg_starts(&prep.scenario);
-    let t_exp_ticks = virtual_clock.ticks(cfg.t_exp);
+    let t_exp_ticks = virtual_clock.ticks(cfg.budget.t_exp);
     let call_end = std::cell::Cell::new(0u64);
     let mut pictures: Vec<String> = Vec::new();
     let out = args.out.clone();
@@ -306,10 +306,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
             "that follow the map"
         },
         prep.length_scale(),
-        used.e_max,
+        used.search.e_max,
         used.search_step(),
-        used.root_step,
-        used.sigma
+        used.rewiring.root_step,
+        used.search.sigma
     );
     for g in &rows {
         let goal = prep.scenario.show(prep.scenario.goals[g.goal_index - 1]);

@@ -125,9 +125,17 @@ impl Prepared {
             let fitted = named.for_grid(&self.scenario.map.grid());
             let fit =
                 |mine: f32, named: f32, fitted: f32| if mine == named { fitted } else { mine };
-            c.e_max = fit(c.e_max, named.e_max, fitted.e_max);
-            c.e_search = fit(c.e_search, named.e_search, fitted.e_search);
-            c.root_step = fit(c.root_step, named.root_step, fitted.root_step);
+            c.search.e_max = fit(c.search.e_max, named.search.e_max, fitted.search.e_max);
+            c.search.e_search = fit(
+                c.search.e_search,
+                named.search.e_search,
+                fitted.search.e_search,
+            );
+            c.rewiring.root_step = fit(
+                c.rewiring.root_step,
+                named.rewiring.root_step,
+                fitted.rewiring.root_step,
+            );
         }
         c.with_sigma(self.scenario.sigma)
     }

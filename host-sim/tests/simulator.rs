@@ -81,7 +81,6 @@ fn base_args(scenarios: Vec<maps::Scenario>, planners: &str, out: &Path) -> Expe
         as_printed: bi_am_rrt::AsPrinted::NONE,
         meet_all_pairs: false,
         obstacle: None,
-        keep_reverse_branches: false,
         search_only: false,
         anytime_ms: 0,
         table: TableOptions::default(),
@@ -148,7 +147,6 @@ fn the_experiment_writes_one_row_per_run() {
     let out = dir.path().join("out");
     let args = ExperimentArgs {
         repeats: 2,
-        keep_reverse_branches: true,
         anytime_ms: 5,
         t_exp: Some(std::time::Duration::from_millis(5)),
         ..base_args(
@@ -828,7 +826,7 @@ fn bench_measures_every_leg_variant_and_seed() {
     let variants =
         host_sim::bench::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8").unwrap();
     assert_eq!(variants[1].name, "Bi-AM-RRT*(E) tuned@e_search=8");
-    assert_eq!(variants[1].cfg.e_search, 8.0);
+    assert_eq!(variants[1].cfg.search.e_search, 8.0);
     let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
@@ -947,6 +945,16 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
         }
     }
     assert_eq!(rows.len(), 24);
+    // Equal time: RRT-Connect + simplify's median on the leg (10, 12 and never: 12 us); our
+    // path's cost is read at the end of the first call ending then or later, before 2 ms.
+    for r in rows.iter().filter(|r| !r.planner.starts_with("OMPL")) {
+        let at = r.equal_us.expect("an equal-time reading");
+        assert!((12.0..2000.0).contains(&at), "read at {at} us");
+        if let Some(e) = r.equal_ratio {
+            assert!(e >= 1.0, "{e}");
+        }
+    }
+    assert!(ratios.contains("path at equal time"), "{ratios}");
     // An unsolved seed counts as infinitely slow: the median of 7, 9 and never is 9.
     let md = std::fs::read_to_string(dir.path().join("out/summary.md")).unwrap();
     assert!(
@@ -1185,18 +1193,22 @@ fn run_lengths_follow_the_map() {
         let mut sc = maps::builtin_by_name("maze").unwrap();
         let maze = Prepared::new(sc.clone());
         let c = maze.config(named);
-        assert_eq!(c.e_max, 4.0);
+        assert_eq!(c.search.e_max, 4.0);
         if tuned {
-            assert!((c.e_search - 12.0).abs() < 1e-5, "{}", c.e_search);
+            assert!(
+                (c.search.e_search - 12.0).abs() < 1e-5,
+                "{}",
+                c.search.e_search
+            );
         }
         assert!((maze.length_scale() - 0.6).abs() < 1e-6);
-        assert_eq!(c.sigma, sc.sigma, "the scenario's sigma is kept");
+        assert_eq!(c.search.sigma, sc.sigma, "the scenario's sigma is kept");
         let mut hand = named;
-        hand.e_max = 8.0;
-        assert_eq!(maze.config(hand).e_max, 8.0, "a length set by hand");
+        hand.search.e_max = 8.0;
+        assert_eq!(maze.config(hand).search.e_max, 8.0, "a length set by hand");
         sc.paper_lengths = true;
         let maze = Prepared::new(sc);
-        assert_eq!(maze.config(named).e_max, named.e_max);
+        assert_eq!(maze.config(named).search.e_max, named.search.e_max);
         assert_eq!(maze.length_scale(), 1.0);
     }
 }

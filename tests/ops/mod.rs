@@ -149,62 +149,58 @@ fn run_with<M: Metric>(
     let mut cfg = configs[b.u8() as usize % configs.len()];
     let (w, h) = (grid.width_m(), grid.height_m());
     let span = w.max(h);
-    cfg.e_max = span * (0.01 + b.unit() * 0.3);
-    cfg.sigma = span * b.unit();
-    cfg.n_max = 1 + b.u8() as u16 % 30;
-    cfg.p_goal = b.unit();
-    cfg.p_uniform = b.unit();
-    cfg.t_exp = Duration::from_micros(1 + b.u16() as u64 * 4);
-    cfg.max_work_per_call = 2_000 + b.u16() as u32 * 2;
-    cfg.max_expansions_per_call = 1 + b.u8() as u32 * 4;
-    // One byte of switches: the reverse branches and, one by one, the tuned set's changes.
+    cfg.search.e_max = span * (0.01 + b.unit() * 0.3);
+    cfg.search.sigma = span * b.unit();
+    cfg.memory.n_max = 1 + b.u8() as u16 % 30;
+    cfg.search.p_goal = b.unit();
+    cfg.search.p_uniform = b.unit();
+    cfg.budget.t_exp = Duration::from_micros(1 + b.u16() as u64 * 4);
+    cfg.budget.max_work = 2_000 + b.u16() as u32 * 2;
+    cfg.budget.max_expansions = 1 + b.u8() as u32 * 4;
+    // One byte of switches: the profile (the tuned one's changes have no switches of their
+    // own), then the tuned set's parameters one by one.
     let flags = b.u8();
-    cfg.keep_reverse_branches = flags & 1 != 0;
-    cfg.recycle_when_full = flags & 2 != 0;
-    cfg.rewire_new = flags & 4 != 0;
+    if flags & 1 != 0 {
+        cfg.profile = bi_am_rrt::Profile::Tuned;
+    }
+    if flags & 2 != 0 {
+        cfg.memory.recycle_cover = (flags >> 2) as u16 % 4;
+    }
     if flags & 8 != 0 {
-        cfg.clock_every = 256;
+        cfg.budget.clock_every = 256;
         // Paced readings up to 256 + 512 k units (k = 0: not paced).
-        cfg.clock_every_max = 256 + (b.u8() as u32 % 8) * 512;
+        cfg.budget.clock_every_max = 256 + (b.u8() as u32 % 8) * 512;
     }
     if flags & 16 != 0 {
-        cfg.n_max_informed = cfg.n_max.saturating_mul(4);
+        cfg.memory.n_max_informed = cfg.memory.n_max.saturating_mul(4);
     }
     if flags & 32 != 0 {
-        cfg.e_search = cfg.e_max * 3.0;
+        cfg.search.e_search = cfg.search.e_max * 3.0;
     }
-    cfg.connect = flags & 64 != 0;
     if flags & 128 != 0 {
-        cfg.path_shortcuts = 4;
-        cfg.p_beacon = 0.2;
+        cfg.rewiring.path_shortcuts = 4;
+        cfg.search.p_beacon = 0.2;
     }
-    // A second byte: dense beacons, density trades, fan steering and its candidate count, and the root's step: off (the paper) or from 5 % of
-    // e_max (a root within e_max / 10 of the agent, so `follow` steps past several nodes in
-    // one call) to 1.05 e_max.
+    // A second byte: the steering's candidate count, and the root's step: off (the paper) or
+    // from 5 % of e_max (a root within e_max / 10 of the agent, so `follow` steps past several
+    // nodes in one call) to 1.05 e_max.
     let more = b.u8();
-    cfg.dense_beacons = more & 2 != 0;
-    cfg.density_trades = more & 4 != 0;
-    cfg.steer_fan = more & 8 != 0;
     if more & 16 != 0 {
         // Few candidates: a fan of one, or a batch split unevenly.
-        cfg.steer_candidates = 1 + (more >> 5) as u16 * 7;
+        cfg.search.steer_candidates = 1 + (more >> 5) as u16 * 7;
     }
     if more & 1 != 0 {
-        cfg.root_step = cfg.e_max * (0.05 + b.unit());
+        cfg.rewiring.root_step = cfg.search.e_max * (0.05 + b.unit());
     }
-    // A third byte: Nearest's view over the steering step only, reused tests, no rewiring
-    // while searching, the paper's Meet over every pair, and Algorithms 4 and 6 as printed,
+    // A third byte: the paper's Meet over every pair, and Algorithms 4 and 6 as printed,
     // switch by switch.
     let third = b.u8();
-    cfg.nearest_step = third & 1 != 0;
-    cfg.reuse_tests = third & 2 != 0;
-    cfg.rewire_while_searching = third & 4 == 0;
-    cfg.meet_all_pairs = third & 8 != 0;
     cfg.as_printed = bi_am_rrt::AsPrinted {
         alg4_takes_x_r2: third & 16 != 0,
         alg6_takes_x_r2: third & 32 != 0,
         alg6_cost: third & 64 != 0,
         alg6_clear: third & 128 != 0,
+        meet_all_pairs: third & 8 != 0,
     };
     let seed = b.u16() as u64;
     let start = b.point(w, h);
@@ -250,7 +246,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                 // Plan: the agent moves towards its last waypoint (most often), teleports, or
                 // is placed anywhere.
                 let next = match op % 12 {
-                    2 | 3 => agent.step_towards(waypoint, 0.1 + b.unit() * cfg.e_max),
+                    2 | 3 => agent.step_towards(waypoint, 0.1 + b.unit() * cfg.search.e_max),
                     4 => b.point(w, h),
                     _ => p.root_position(),
                 };
@@ -270,7 +266,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                                 pr.waypoint
                             ));
                         }
-                        if pr.work > cfg.max_work_per_call as u64 + 64 * N as u64 + 100_000 {
+                        if pr.work > cfg.budget.max_work as u64 + 64 * N as u64 + 100_000 {
                             return Err(format!("unbounded call: {pr:?}"));
                         }
                     }

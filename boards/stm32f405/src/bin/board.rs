@@ -44,7 +44,7 @@ fn main() -> ! {
         defmt::Display2Format(&planner.config().name()),
         stm32f405_board::scenario::NAME,
         CORE_HZ / 1_000_000,
-        planner.config().t_exp.as_millis() as u32
+        planner.config().budget.t_exp.as_millis() as u32
     );
     let times = TIMES.take();
     let protocol = Protocol::default();

@@ -173,7 +173,7 @@ async fn planning(
         defmt::Display2Format(&planner.config().name()),
         scenario::NAME,
         CORE_HZ / 1_000_000,
-        planner.config().t_exp.as_millis() as u32
+        planner.config().budget.t_exp.as_millis() as u32
     );
     let mut from = start();
     for (i, goal) in goals().enumerate() {
