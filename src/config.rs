@@ -155,6 +155,10 @@ impl AsPrinted {
 /// - no root rewiring before the goal joins (the same first paths, less work);
 /// - RRT-Connect's greedy step between the two trees while searching (Kuffner and LaValle);
 /// - a node added inside the informed ellipse rewires its neighbours (RRT*'s step);
+/// - with [`Rewiring::path_shortcuts`], a path node whose grandparent is hidden round a
+///   corner takes a new node on one of its two edges as parent, or its parent splits in two,
+///   one point on each edge (corner cuts, module `rewire`): the path closes in on the
+///   obstacles' corners as a path simplifier's does;
 /// - a neighbourhood inside the ellipse that the density rule holds trades its worst leaf
 ///   for a state that bounds a shorter path, and a full arena trades leaves that cannot
 ///   improve the path for states that can ([`Memory::recycle_cover`] keeps a cover).
