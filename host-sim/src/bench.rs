@@ -112,11 +112,12 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         | "connect"
         | "rewire_new"
         | "recycle_when_full"
-        | "density_trades" => {
+        | "density_trades"
+        | "corner_cuts" => {
             return Err(anyhow!(
                 "{field:?} is part of the tuned profile since issue 26 (no switch of its own; \
                  `@profile=paper` turns all of them off; measured one by one in \
-                 docs/performance.md, \"One tuned default\")"
+                 docs/performance.md, \"One tuned default\" and \"Corner cuts\")"
             ));
         }
         _ => return Err(anyhow!("unknown field {field:?}")),
