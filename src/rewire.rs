@@ -75,6 +75,43 @@ use crate::tree::{Mark, NodeId};
 /// edge of the farthest point seen.
 const CUT_STEPS: usize = 5;
 
+/// Why [`TreeStore::rewire`] left an edge as it was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Refused {
+    /// Not shorter, not affordable before the deadline, or not a change.
+    NoGain,
+    /// Shorter, but the segment is blocked.
+    Hidden,
+}
+
+/// The largest `d` in `(0, reach]` at which `sees(d)` holds, by bisection from `reach / 32`
+/// ([`CUT_STEPS`] more tests), for the corner cuts; `None` when the first test fails or the
+/// call's deadline passes.
+fn farthest_seen<M: Metric, C: Clock + ?Sized, const K: usize>(
+    env: &Env<'_, '_, M, K>,
+    meter: &Meter<'_, C>,
+    reach: f32,
+    mut sees: impl FnMut(f32) -> bool,
+) -> Option<f32> {
+    let first = reach / 32.0;
+    if meter.expired(&env.call) || !sees(first) {
+        return None;
+    }
+    let (mut lo, mut hi) = (first, reach);
+    for _ in 0..CUT_STEPS {
+        if meter.expired(&env.call) {
+            return None;
+        }
+        let mid = 0.5 * (lo + hi);
+        if sees(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(lo)
+}
+
 /// Limits of one rewiring call.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Slice {
@@ -123,8 +160,22 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         known_free: bool,
         meter: &Meter<'_, C>,
     ) -> bool {
+        self.rewire(env, parent, child, via, known_free, meter)
+            .is_ok()
+    }
+
+    /// [`TreeStore::try_rewire_via`], saying why an edge was not changed.
+    fn rewire<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        parent: NodeId,
+        child: NodeId,
+        via: Option<Point>,
+        known_free: bool,
+        meter: &Meter<'_, C>,
+    ) -> Result<(), Refused> {
         if parent == child || self.tree.parent(child) == Some(parent) {
-            return false;
+            return Err(Refused::NoGain);
         }
         let (pp, pc) = (self.pos(parent), self.pos(child));
         let length = match via {
@@ -132,20 +183,26 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             None => pp.dist(pc),
         };
         let new = self.cost(parent).extend(length, false);
-        if new >= self.cost(child)
-            || !env.affords_move(&self.tree, child, meter)
-            || !(known_free || env.free(pp, pc, meter))
-        {
-            return false;
+        if new >= self.cost(child) || !env.affords_move(&self.tree, child, meter) {
+            return Err(Refused::NoGain);
         }
-        // The edge change refreshes the moved subtree's costs: charge its size too.
-        match self.tree.set_parent(child, parent, false) {
-            Ok(moved) => {
-                meter.charge(units(moved).saturating_add(4));
-                true
-            }
-            Err(_) => false,
+        if !(known_free || env.free(pp, pc, meter)) {
+            return Err(Refused::Hidden);
         }
+        self.move_below(child, parent, meter).ok_or(Refused::NoGain)
+    }
+
+    /// `UpdateEdge`: `child` below `parent`, charging the moved subtree (its costs are
+    /// refreshed).
+    fn move_below<C: Clock + ?Sized>(
+        &mut self,
+        child: NodeId,
+        parent: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> Option<()> {
+        let moved = self.tree.set_parent(child, parent, false).ok()?;
+        meter.charge(units(moved).saturating_add(4));
+        Some(())
     }
 
     /// Path shortcuts ([`crate::config::Rewiring::path_shortcuts`], module docs): up to `tests` nodes of the
@@ -180,23 +237,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 continue;
             };
             // The grandparent as parent when that is shorter and `x` sees it; when it is
-            // hidden, a corner cut (the cursor goes on from the cut's new node).
-            let (px, pg) = (self.pos(x), self.pos(grand));
-            let shorter = self.cost(grand).extend(pg.dist(px), false) < self.cost(x);
-            if !shorter || !env.affords_move(&self.tree, x, meter) {
-                x = parent;
-            } else if env.free(pg, px, meter) {
-                match self.tree.set_parent(x, grand, false) {
-                    Ok(moved) => meter.charge(units(moved).saturating_add(4)),
-                    Err(_) => x = parent,
-                }
-            } else {
-                let cut = env.cfg.profile.is_tuned();
-                match cut.then(|| self.cut_corner(env, x, parent, grand, meter)) {
-                    Some(Some(cut)) => x = cut,
-                    _ => x = parent,
-                }
-            }
+            // hidden, a corner cut (tuned; the cursor goes on from the cut's new node).
+            x = match self.rewire(env, grand, x, None, false, meter) {
+                Ok(()) => x,
+                Err(Refused::Hidden) if env.cfg.profile.is_tuned() => self
+                    .cut_corner(env, x, parent, grand, meter)
+                    .unwrap_or(parent),
+                Err(_) => parent,
+            };
         }
         self.shortcut_at = Some(x);
     }
@@ -248,8 +296,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             Some(b) => self.insert(b, cut, false).ok()?,
             None => cut,
         };
-        let moved = self.tree.set_parent(x, cut, false).ok()?;
-        meter.charge(units(moved).saturating_add(4));
+        self.move_below(x, cut, meter)?;
         Some(cut)
     }
 
@@ -272,26 +319,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             return None;
         }
         let at = |d: f32| (pp.lerp(pg, d / lg), pp.lerp(px, d / lx));
-        let sees = |d: f32| {
+        let lo = farthest_seen(env, meter, reach, |d| {
             let (a, b) = at(d);
             env.free(a, b, meter)
-        };
-        let first = reach / 32.0;
-        if meter.expired(&env.call) || !sees(first) {
-            return None;
-        }
-        let (mut lo, mut hi) = (first, reach);
-        for _ in 0..CUT_STEPS {
-            if meter.expired(&env.call) {
-                return None;
-            }
-            let mid = 0.5 * (lo + hi);
-            if sees(mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+        })?;
         let (a, b) = at(lo);
         let gain = 2.0 * lo - a.dist(b);
         (gain > 0.1 * env.map.grid().cell_size()
@@ -312,22 +343,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         end: Point,
         meter: &Meter<'_, C>,
     ) -> Option<Point> {
-        let first = 1.0 / 32.0;
-        if meter.expired(&env.call) || !env.free(eye, p.lerp(end, first), meter) {
-            return None;
-        }
-        let (mut lo, mut hi) = (first, 1.0f32);
-        for _ in 0..CUT_STEPS {
-            if meter.expired(&env.call) {
-                return None;
-            }
-            let mid = 0.5 * (lo + hi);
-            if env.free(eye, p.lerp(end, mid), meter) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+        let lo = farthest_seen(env, meter, 1.0, |t| env.free(eye, p.lerp(end, t), meter))?;
         let q = p.lerp(end, lo);
         let gain = eye.dist(p) + p.dist(q) - eye.dist(q);
         (gain > 0.1 * env.map.grid().cell_size() && env.free(q, end, meter)).then_some(q)
@@ -586,6 +602,27 @@ mod tests {
     use crate::metric::Euclidean;
 
     /// A zig-zag path of `points` below the root at `points[0]`; returns the last node.
+    /// A path from (2.5, 2.5) to (2.5, 16.5) round the end of a wall at row 10, columns 0-11
+    /// ([`wall_end`]), its corner nodes away from the wall's corners.
+    const ZIGZAG: [(f32, f32); 9] = [
+        (2.5, 2.5),
+        (6.5, 4.5),
+        (4.5, 7.5),
+        (10.5, 6.5),
+        (14.5, 9.5),
+        (13.5, 12.5),
+        (8.5, 14.5),
+        (6.5, 17.5),
+        (2.5, 16.5),
+    ];
+
+    /// The bits of a 20 x 20 m map of 1 m cells with a wall at row 10 over columns 0-11.
+    fn wall_end() -> [u8; OccupancyGrid::bytes_needed(20, 20)] {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        pack_grid(&mut bits, 20, 20, |c, r| r == 10 && c < 12).unwrap();
+        bits
+    }
+
     fn zigzag(store: &mut TreeStore<64, 16>, points: &[Point]) -> NodeId {
         store.reset(points[0]);
         let mut last = NodeId(0);
@@ -762,23 +799,11 @@ mod tests {
     fn corner_cuts_pull_the_path_round_the_corner() {
         // The map and zigzag of the test below; the shortest way from (2.5, 2.5) to (2.5,
         // 16.5) round the wall's end touches its corners (12, 10) and (12, 11).
-        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
-        pack_grid(&mut bits, 20, 20, |c, r| r == 10 && c < 12).unwrap();
+        let bits = wall_end();
         let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
         let (start, end) = (Point::new(2.5, 2.5), Point::new(2.5, 16.5));
         let optimum = start.dist(Point::new(12.0, 10.0)) + 1.0 + Point::new(12.0, 11.0).dist(end);
-        let pts = [
-            (2.5, 2.5),
-            (6.5, 4.5),
-            (4.5, 7.5),
-            (10.5, 6.5),
-            (14.5, 9.5),
-            (13.5, 12.5),
-            (8.5, 14.5),
-            (6.5, 17.5),
-            (2.5, 16.5),
-        ]
-        .map(|(x, y)| Point::new(x, y));
+        let pts = ZIGZAG.map(|(x, y)| Point::new(x, y));
         let clock = FakeClock::new(1);
         let meter = Meter::new(&clock);
         let mut lengths = [0.0f32; 2];
@@ -813,8 +838,7 @@ mod tests {
     #[test]
     fn path_shortcuts_straighten_the_path_and_keep_it_free() {
         // 20 x 20 m; a wall at row 10 over columns 0-11 (the way round is past column 12).
-        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
-        pack_grid(&mut bits, 20, 20, |c, r| r == 10 && c < 12).unwrap();
+        let bits = wall_end();
         let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
         let cfg = Config::bi_am_rrt(crate::MetricKind::Euclidean);
         let env = euclidean_env(&map, &cfg);
@@ -822,18 +846,7 @@ mod tests {
         let meter = Meter::new(&clock);
         let mut store = TreeStore::<64, 16>::new();
         assert!(store.index.reshape(20.0, 20.0, 2.0));
-        let pts = [
-            (2.5, 2.5),
-            (6.5, 4.5),
-            (4.5, 7.5),
-            (10.5, 6.5),
-            (14.5, 9.5),
-            (13.5, 12.5),
-            (8.5, 14.5),
-            (6.5, 17.5),
-            (2.5, 16.5),
-        ]
-        .map(|(x, y)| Point::new(x, y));
+        let pts = ZIGZAG.map(|(x, y)| Point::new(x, y));
         let goal = zigzag(&mut store, &pts);
         let before = store.cost(goal).length;
         for _ in 0..20 {
