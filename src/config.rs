@@ -281,6 +281,39 @@ pub struct Memory {
     pub recycle_cover: u16,
 }
 
+/// How the agent and the obstacles move (beyond the paper, whose obstacles stay put; module
+/// [`crate::motion`]). All zero (the default): waypoints and tree edges are judged against
+/// where the obstacles are now, as in the paper.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Motion {
+    /// The agent's top speed in m/s: a waypoint `d` metres away must stay clear of every
+    /// obstacle's sweep for `d / agent_speed` seconds (0: not stated, 0 s).
+    pub agent_speed: f32,
+    /// Seconds between two `plan` calls: the agent drives one waypoint for at most this long
+    /// before the next call, and the waypoint must stay clear that much longer.
+    pub period: f32,
+    /// Seconds ahead a tree edge is judged (every edge, against each obstacle's sweep over
+    /// `[0, horizon]`), and the time a waypoint must stay clear after the agent could reach
+    /// it: the agent gives way to what is predicted to cross its way this soon.
+    pub horizon: f32,
+    /// Top speed of any obstacle in m/s: past its prediction's horizon an obstacle may be
+    /// anywhere it can reach at this speed, and during the first `period` the agent keeps out
+    /// of where any obstacle could be at this speed whatever it reported (so the agent never
+    /// drives into an obstacle that turns without notice).
+    pub obstacle_speed: f32,
+}
+
+impl Motion {
+    /// Nothing stated: the paper's still obstacles.
+    pub const NONE: Self = Self {
+        agent_speed: 0.0,
+        period: 0.0,
+        horizon: 0.0,
+        obstacle_speed: 0.0,
+    };
+}
+
 /// Everything that configures a planner, on one screen: which planner (Table 1's two
 /// switches on a base and a metric, and the profile), then four groups of parameters.
 /// [`Config::default`] is the tuned Bi-AM-RRT*(D); [`Config::paper`] the paper's, and
@@ -310,6 +343,8 @@ pub struct Config {
     pub memory: Memory,
     /// Which parts of Algorithms 4-6 run as printed ([`AsPrinted`]; both profiles: none).
     pub as_printed: AsPrinted,
+    /// How the agent and the obstacles move ([`Motion::NONE`] unless stated).
+    pub motion: Motion,
 }
 
 impl Default for Config {
@@ -363,6 +398,7 @@ impl Config {
                 recycle_cover: 0,
             },
             as_printed: AsPrinted::NONE,
+            motion: Motion::NONE,
         }
     }
 
@@ -539,10 +575,11 @@ impl Config {
     /// Checks every field; the error names the first field out of range. A configuration that
     /// passes gives a planner that grows: `t_exp` is not zero, `e_max` is finite and positive,
     /// `sigma` finite and not negative, `n_max`, the sampling and steering counts and both
-    /// per-call caps at least 1, and the two probabilities in `[0, 1]`.
+    /// per-call caps at least 1, the three probabilities in `[0, 1]`, and the motion's
+    /// speeds, period and horizon finite and not negative.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let unit = |p: f32| (0.0..=1.0).contains(&p);
-        let (s, b) = (&self.search, &self.budget);
+        let (s, b, m) = (&self.search, &self.budget, &self.motion);
         let checks = [
             (!b.t_exp.is_zero(), ConfigError::TExp),
             (s.e_max.is_finite() && s.e_max > 0.0, ConfigError::EMax),
@@ -563,6 +600,12 @@ impl Config {
             (unit(s.p_goal), ConfigError::PGoal),
             (unit(s.p_uniform), ConfigError::PUniform),
             (unit(s.p_beacon), ConfigError::PBeacon),
+            (
+                [m.agent_speed, m.period, m.horizon, m.obstacle_speed]
+                    .iter()
+                    .all(|v| v.is_finite() && *v >= 0.0),
+                ConfigError::Motion,
+            ),
         ];
         match checks.iter().find(|(ok, _)| !ok) {
             Some(&(_, e)) => Err(e),

@@ -150,6 +150,23 @@ pub fn segment_point_dist_sq(a: Point, b: Point, p: Point) -> f32 {
     a.lerp(b, closest_param(a, b, p)).dist_sq(p)
 }
 
+/// Squared distance between the closed segments `a-b` and `c-d`: 0 when they cross,
+/// else the least of the four endpoint-to-segment distances.
+pub fn segment_segment_dist_sq(a: Point, b: Point, c: Point, d: Point) -> f32 {
+    let cross = |o: Point, p: Point, q: Point| (p - o).x * (q - o).y - (p - o).y * (q - o).x;
+    let (d1, d2) = (cross(c, d, a), cross(c, d, b));
+    let (d3, d4) = (cross(a, b, c), cross(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return 0.0;
+    }
+    segment_point_dist_sq(c, d, a)
+        .min(segment_point_dist_sq(c, d, b))
+        .min(segment_point_dist_sq(a, b, c))
+        .min(segment_point_dist_sq(a, b, d))
+}
+
 /// A uniform `f32` in `[0, 1)` from 24 random bits.
 #[inline]
 pub fn unit_f32<R: Rng + ?Sized>(rng: &mut R) -> f32 {

@@ -15,12 +15,14 @@
 //!
 //! - [`geometry`]: points, segments, uniform sampling in a disc and in the informed ellipse.
 //! - [`map`]: the occupancy grid borrowed from bit-packed bytes (flash-friendly), dynamic
-//!   circular obstacles, and the exact `free_path` collision test.
+//!   circular obstacles (still, or moving with a reported velocity), and the exact
+//!   `free_path` collision test.
 //! - [`tree`]: the fixed-capacity tree arena with cached, blocked-aware path costs, edge
 //!   updates and re-rooting.
 //! - [`index`]: the bucket-grid spatial index for `Nearest` and `Nearby`.
 //! - [`clock`]: the caller's clock, deadlines for the time budgets, and a fake/virtual clock;
 //!   `cortex` (feature `cortex-m`): SysTick and DWT clocks for the chip.
+//! - [`motion`]: the waypoint rule against moving obstacles (beyond the paper).
 //! - [`sweep`]: bounded queue, stack and seen-set for the rewiring sweeps.
 //! - [`error`]: the small error enums.
 //!
@@ -119,6 +121,7 @@ pub mod geometry;
 pub mod index;
 pub mod map;
 pub mod metric;
+pub mod motion;
 pub mod planner;
 mod rewire;
 pub mod sample;
@@ -127,9 +130,9 @@ mod slots;
 pub mod sweep;
 pub mod tree;
 
-pub use config::{AsPrinted, Base, Config, MetricKind, Profile, RewireMode};
+pub use config::{AsPrinted, Base, Config, MetricKind, Motion, Profile, RewireMode};
 pub use geometry::Point;
-pub use map::{Circle, Map, OccupancyGrid};
+pub use map::{Circle, Map, Moving, OccupancyGrid};
 pub use metric::{DiffusionTable, Euclidean, Metric};
 pub use planner::{PathInfo, Planner, Progress, Stats, Status, Storage, Wait};
 

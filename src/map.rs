@@ -32,12 +32,15 @@
 //! cost grows with the number of rows and the number of cells crossed, never with the map's size.
 //!
 //! A dynamic obstacle is a closed disc: a segment is blocked by it when the distance from the
-//! centre to the *segment* (not the infinite line) is at most the radius.
+//! centre to the *segment* (not the infinite line) is at most the radius. An obstacle that moves
+//! ([`Moving`], beyond the paper) blocks, for the tree, the capsule it sweeps over the edge
+//! window ([`Obstacles::set_sweep`]); `free_path` uses that test, [`Map::free_now`] the discs
+//! where they are.
 
 use core::ops::ControlFlow;
 
 use crate::error::{InputError, MapError, ObstacleError};
-use crate::geometry::{Point, segment_point_dist_sq};
+use crate::geometry::{Point, segment_point_dist_sq, segment_segment_dist_sq};
 use crate::slots::{cell_index, sat_u32, to_u16};
 
 /// Safety margin of the grid collision test, in cells (see the module documentation).
@@ -349,17 +352,106 @@ impl Circle {
     }
 }
 
+/// A dynamic obstacle as a perception stack reports it (beyond the paper: its obstacles stay
+/// put): a disc where it is at the next `plan` call, its velocity, and how long that
+/// prediction may be trusted. A still circle is `Moving::still(circle)`.
+///
+/// Over a time window `[0, w]` the obstacle sweeps the capsule from `center` to
+/// `center + velocity * min(w, trusted_for)` of radius `radius + bound * max(0, w -
+/// trusted_for)`, where `bound` is the stated top speed of any obstacle
+/// ([`crate::config::Motion::obstacle_speed`]): past its horizon the obstacle may have turned
+/// anywhere at that speed ([`Moving::sweep`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Moving {
+    /// The disc at the time of the next `plan` call.
+    pub circle: Circle,
+    /// Velocity in metres per second.
+    pub velocity: Point,
+    /// Seconds for which the straight-line prediction holds (`f32::INFINITY`: for ever).
+    pub trusted_for: f32,
+}
+
+impl Moving {
+    /// A circle that does not move.
+    pub const fn still(circle: Circle) -> Self {
+        Self {
+            circle,
+            velocity: Point::ZERO,
+            trusted_for: f32::INFINITY,
+        }
+    }
+
+    /// A circle moving at `velocity` (m/s), trusted for ever.
+    pub const fn new(circle: Circle, velocity: Point) -> Self {
+        Self {
+            circle,
+            velocity,
+            trusted_for: f32::INFINITY,
+        }
+    }
+
+    /// The same, its prediction trusted for `seconds` only.
+    pub const fn trusted_for(mut self, seconds: f32) -> Self {
+        self.trusted_for = seconds;
+        self
+    }
+
+    /// The capsule swept over `[0, window]` seconds by an obstacle whose speed is at most
+    /// `bound` once its prediction ends: `(from, to, radius)`.
+    pub fn sweep(&self, window: f32, bound: f32) -> (Point, Point, f32) {
+        let c = self.circle.center;
+        let trusted = window.min(self.trusted_for).max(0.0);
+        let beyond = (window - self.trusted_for).max(0.0);
+        let to = if self.velocity == Point::ZERO || trusted == 0.0 {
+            c
+        } else {
+            Point::new(
+                c.x + self.velocity.x * trusted,
+                c.y + self.velocity.y * trusted,
+            )
+        };
+        let grow = if beyond > 0.0 { bound * beyond } else { 0.0 };
+        (c, to, self.circle.radius + grow)
+    }
+
+    /// Whether the closed segment `a-b` meets the capsule swept over `[0, window]`.
+    pub fn sweep_meets(&self, a: Point, b: Point, window: f32, bound: f32) -> bool {
+        let (from, to, r) = self.sweep(window, bound);
+        if from == to {
+            segment_point_dist_sq(a, b, from) <= r * r
+        } else {
+            segment_segment_dist_sq(a, b, from, to) <= r * r
+        }
+    }
+
+    fn is_valid(&self) -> bool {
+        self.circle.is_valid() && self.velocity.is_finite() && self.trusted_for >= 0.0
+    }
+}
+
 /// Identifies a dynamic obstacle for its removal. Ids are not reused until 2^32 further
 /// additions have been made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ObstacleId(pub u32);
 
-/// A bounded set of at most `K` dynamic circular obstacles.
+/// A bounded set of at most `K` dynamic obstacles, still or moving.
+///
+/// Two tests: *now* ([`Obstacles::blocks_now`], [`Obstacles::contains_now`]) against the
+/// discs where they are, and the *tree's* ([`Obstacles::blocks_segment`],
+/// [`Obstacles::contains`]) against what each sweeps over the edge window
+/// ([`Obstacles::set_sweep`]: the planner sets it to [`crate::config::Motion::horizon`]): a
+/// tree edge is judged against where its obstacles will be within that window, so the path
+/// passes behind a walking person rather than in front. With still circles, or a window of 0,
+/// both tests are the paper's.
 #[derive(Clone, Debug)]
 pub struct Obstacles<const K: usize> {
-    items: heapless::Vec<(ObstacleId, Circle), K>,
+    items: heapless::Vec<(ObstacleId, Moving), K>,
     next_id: u32,
+    /// Edge window in seconds and the obstacles' top speed past a prediction, in m/s.
+    window: f32,
+    bound: f32,
 }
 
 impl<const K: usize> Default for Obstacles<K> {
@@ -374,13 +466,34 @@ impl<const K: usize> Obstacles<K> {
         Self {
             items: heapless::Vec::new(),
             next_id: 0,
+            window: 0.0,
+            bound: 0.0,
         }
     }
 
-    /// Adds a circle and returns its id; `Err(Full)` when `K` circles are present,
+    /// Sets the tree's edge window (seconds) and the obstacles' top speed past a prediction
+    /// (m/s); non-finite or negative values count as 0.
+    pub fn set_sweep(&mut self, window: f32, bound: f32) {
+        let ok = |v: f32| if v.is_finite() && v > 0.0 { v } else { 0.0 };
+        self.window = ok(window);
+        self.bound = ok(bound);
+    }
+
+    /// The edge window and top speed ([`Obstacles::set_sweep`]).
+    pub fn sweep(&self) -> (f32, f32) {
+        (self.window, self.bound)
+    }
+
+    /// Adds a still circle and returns its id; `Err(Full)` when `K` circles are present,
     /// `Err(BadCircle)` for a non-finite centre or a radius that is not finite and positive.
     pub fn add(&mut self, circle: Circle) -> Result<ObstacleId, ObstacleError> {
-        if !circle.is_valid() {
+        self.add_moving(Moving::still(circle))
+    }
+
+    /// Adds an obstacle that may move; `Err(BadCircle)` also for a non-finite velocity or a
+    /// horizon that is negative or NaN.
+    pub fn add_moving(&mut self, obstacle: Moving) -> Result<ObstacleId, ObstacleError> {
+        if !obstacle.is_valid() {
             return Err(ObstacleError::BadCircle);
         }
         if self.items.is_full() {
@@ -393,54 +506,103 @@ impl<const K: usize> Obstacles<K> {
         }
         self.next_id = id.0.wrapping_add(1);
         self.items
-            .push((id, circle))
+            .push((id, obstacle))
             .map_err(|_| ObstacleError::Full)?;
         Ok(id)
     }
 
-    /// Removes the circle with this id and returns it.
+    /// Replaces what is known of an obstacle (a new position, velocity or horizon): O(K).
+    pub fn update(&mut self, id: ObstacleId, obstacle: Moving) -> Result<(), ObstacleError> {
+        if !obstacle.is_valid() {
+            return Err(ObstacleError::BadCircle);
+        }
+        let slot = self
+            .items
+            .iter_mut()
+            .find(|(i, _)| *i == id)
+            .ok_or(ObstacleError::UnknownId)?;
+        slot.1 = obstacle;
+        Ok(())
+    }
+
+    /// Removes the obstacle with this id and returns its disc.
     pub fn remove(&mut self, id: ObstacleId) -> Result<Circle, ObstacleError> {
         let pos = self
             .items
             .iter()
             .position(|(i, _)| *i == id)
             .ok_or(ObstacleError::UnknownId)?;
-        Ok(self.items.swap_remove(pos).1)
+        Ok(self.items.swap_remove(pos).1.circle)
     }
 
-    /// The circle with this id.
+    /// The disc of the obstacle with this id.
     pub fn get(&self, id: ObstacleId) -> Option<Circle> {
-        self.items.iter().find(|(i, _)| *i == id).map(|(_, c)| *c)
+        self.get_moving(id).map(|m| m.circle)
     }
 
-    /// The circles present with their ids, in no particular order.
+    /// What is known of the obstacle with this id.
+    pub fn get_moving(&self, id: ObstacleId) -> Option<Moving> {
+        self.items.iter().find(|(i, _)| *i == id).map(|(_, m)| *m)
+    }
+
+    /// The discs present with their ids, in no particular order.
     pub fn iter(&self) -> impl Iterator<Item = (ObstacleId, Circle)> + '_ {
+        self.items.iter().map(|(i, m)| (*i, m.circle))
+    }
+
+    /// The obstacles present with their ids and motion, in no particular order.
+    pub fn iter_moving(&self) -> impl Iterator<Item = (ObstacleId, Moving)> + '_ {
         self.items.iter().copied()
     }
 
-    /// Number of circles present.
+    /// Number of obstacles present.
     pub fn len(&self) -> usize {
         self.items.len()
     }
 
-    /// Whether no circle is present.
+    /// Whether no obstacle is present.
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
     }
 
-    /// Removes every circle.
+    /// Whether some obstacle moves.
+    pub fn any_moving(&self) -> bool {
+        self.items.iter().any(|(_, m)| m.velocity != Point::ZERO)
+    }
+
+    /// Removes every obstacle.
     pub fn clear(&mut self) {
         self.items.clear();
     }
 
-    /// Whether any circle meets the segment `a-b`.
+    /// The tree's test: whether any obstacle's sweep over the edge window meets `a-b` (the
+    /// disc itself when still or with a window of 0).
     pub fn blocks_segment(&self, a: Point, b: Point) -> bool {
-        self.items.iter().any(|(_, c)| c.intersects_segment(a, b))
+        self.blocks_within(a, b, self.window)
     }
 
-    /// Whether any circle contains `p`.
+    /// Whether any obstacle's sweep over `[0, window]` seconds meets `a-b`.
+    pub fn blocks_within(&self, a: Point, b: Point, window: f32) -> bool {
+        self.items
+            .iter()
+            .any(|(_, m)| m.sweep_meets(a, b, window, self.bound))
+    }
+
+    /// The tree's test: whether any obstacle's sweep over the edge window contains `p`.
     pub fn contains(&self, p: Point) -> bool {
-        self.items.iter().any(|(_, c)| c.contains(p))
+        self.blocks_segment(p, p)
+    }
+
+    /// Whether any disc, where it is now, meets `a-b`.
+    pub fn blocks_now(&self, a: Point, b: Point) -> bool {
+        self.items
+            .iter()
+            .any(|(_, m)| m.circle.intersects_segment(a, b))
+    }
+
+    /// Whether any disc, where it is now, contains `p`.
+    pub fn contains_now(&self, p: Point) -> bool {
+        self.items.iter().any(|(_, m)| m.circle.contains(p))
     }
 }
 
@@ -477,9 +639,16 @@ impl<'a, const K: usize> Map<'a, K> {
     }
 
     /// `free_path(a, b)` of the paper: the segment is inside the map, touches no occupied cell
-    /// and meets no dynamic circle.
+    /// and meets no dynamic circle (for a moving one: its sweep over the edge window,
+    /// [`Obstacles::blocks_segment`]).
     pub fn free_path(&self, a: Point, b: Point) -> bool {
         self.grid.segment_free(a, b) && !self.obstacles.blocks_segment(a, b)
+    }
+
+    /// Whether the segment is inside the map, touches no occupied cell and meets no dynamic
+    /// disc where it is now (not its sweep: [`Obstacles::blocks_now`]).
+    pub fn free_now(&self, a: Point, b: Point) -> bool {
+        self.grid.segment_free(a, b) && !self.obstacles.blocks_now(a, b)
     }
 
     /// Whether a single position is free (the degenerate segment `p-p`).
@@ -487,13 +656,14 @@ impl<'a, const K: usize> Map<'a, K> {
         self.grid.point_free(p) && !self.obstacles.blocks_segment(p, p)
     }
 
-    /// Validates a position given at the API edge: finite, inside the map, not in an obstacle.
+    /// Validates a position given at the API edge: finite, inside the map, not in an obstacle
+    /// (a dynamic one where it is now: a goal on a person's way is still a goal).
     pub fn check_point(&self, p: Point) -> Result<(), InputError> {
         if !p.is_finite() {
             Err(InputError::NotFinite)
         } else if !self.grid.contains(p) {
             Err(InputError::OutOfBounds)
-        } else if !self.free_point(p) {
+        } else if !self.free_now(p, p) {
             Err(InputError::InObstacle)
         } else {
             Ok(())

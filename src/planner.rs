@@ -56,6 +56,21 @@
 //! compare blocked-last, rewiring moves blocked nodes onto any free branch the tree holds, and
 //! the returned path leaves the obstacle as soon as such a branch exists. The agent never gets a
 //! waypoint across a blocked edge: it waits at the root until rewiring has found a way around.
+//!
+//! # Moving obstacles (beyond the paper)
+//!
+//! An obstacle may carry a velocity and a horizon ([`crate::map::Moving`]); the caller submits
+//! each one's state before a call ([`Planner::update_obstacle`], O(K), applied at the start
+//! of the next call: the edges are re-flagged, O(N K) work charged to that call, and the
+//! sweeps restart only where a flag changed). Tree edges are judged against each obstacle's
+//! sweep over the motion's `horizon` ([`crate::config::Motion`]; the stated rule: every edge,
+//! near the root or far ahead, against the same window), so the path passes behind a walking
+//! person rather than in front. The waypoint rule generalises as module [`crate::motion`]
+//! states: the waypoint's segment stays clear of every sweep for the drive at the agent's top
+//! speed, the period until the next call and the horizon; otherwise the agent goes as far as
+//! is clear, gives way ([`Wait::GivingWay`]), evades ([`Status::Evading`]) or, with nothing
+//! clear, holds ([`Wait::Cornered`]). Within its first period a move never comes nearer any
+//! obstacle than holding would, whatever the obstacle does within the stated top speed.
 
 use rand_core::Rng;
 
@@ -63,8 +78,9 @@ use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config, RewireMode};
 use crate::error::{InputError, ObstacleError, SetupError, TreeError};
 use crate::geometry::Point;
-use crate::map::{Circle, Map, ObstacleId};
+use crate::map::{Circle, Map, Moving, ObstacleId};
 use crate::metric::Metric;
+use crate::motion::{Choice, choose};
 use crate::rewire::Slice;
 use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
@@ -121,6 +137,10 @@ pub enum Status {
     /// The assisting metric places the goal at an infinite distance from the agent (a region
     /// its table cuts off): the tree keeps growing, but the metric cannot guide it there.
     Unreachable,
+    /// A moving obstacle is predicted to reach the agent where it stands: the waypoint is a
+    /// point off the path that stays clear longer (module [`crate::motion`]); the agent
+    /// comes back to the path once the way is clear.
+    Evading,
 }
 
 /// Why the agent holds.
@@ -138,6 +158,13 @@ pub enum Wait {
     /// the cost of every node: milliseconds for thousands of nodes on a microcontroller)
     /// would have ended after the call's budget: the agent goes on at the next call.
     OutOfTime,
+    /// A moving obstacle is predicted to cross the way to the next waypoint within the time
+    /// the agent needs to drive it plus the motion's `period` and `horizon`
+    /// ([`crate::config::Motion`]): the agent gives way where it stands.
+    GivingWay,
+    /// No move, holding included, stays clear of the obstacles' predicted sweeps for the
+    /// drive alone: the agent holds (it drives into no obstacle; one may run into it).
+    Cornered,
 }
 
 /// What a `plan` call did and where the agent should go.
@@ -230,6 +257,9 @@ pub struct Planner<'s, 'm, M, R, const N: usize, const B: usize, const K: usize>
     /// A step of [`Planner::follow`] was put off in this call: it would have ended after
     /// the deadline.
     deferred: bool,
+    /// An obstacle was updated since the last call ([`Planner::update_obstacle`]): the next
+    /// call re-flags the edges first.
+    stale: bool,
     /// The rates the last call measured ([`Meter::rates`]) and the clock's ticks per second
     /// they were measured in: the next call predicts with them from its start.
     rate: (u64, (u64, u64)),
@@ -260,6 +290,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         map.check_point(start)?;
         metric.check_map(map.grid()).map_err(SetupError::Metric)?;
         let side = cfg.search.e_max.max(map.grid().cell_size());
+        let mut map = map;
+        let m = &cfg.motion;
+        map.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);
         let Storage { forward, reverse } = storage;
         for store in [&mut *forward, &mut *reverse] {
             if !store.index.reshape(w, h, side) {
@@ -282,6 +315,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             deferred: false,
             rate: (0, (0, 0)),
             call: Deadline::NEVER,
+            stale: false,
         })
     }
 
@@ -402,13 +436,56 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         Ok(c)
     }
 
+    /// Adds an obstacle that may move ([`crate::map::Moving`]; module [`crate::motion`]).
+    pub fn add_moving_obstacle(&mut self, obstacle: Moving) -> Result<ObstacleId, ObstacleError> {
+        let id = self.map.obstacles_mut().add_moving(obstacle)?;
+        self.reflag();
+        Ok(id)
+    }
+
+    /// Submits what is now known of an obstacle (its disc at the next call, velocity and
+    /// horizon, as a perception stack reports it): O(K), nothing else is done until the next
+    /// `plan` or `grow` call re-flags the edges (O(N K) work, charged to that call). The
+    /// planner does not move obstacles by itself: submit each one's state before every call
+    /// (a state not updated is predicted from where it was given).
+    pub fn update_obstacle(
+        &mut self,
+        id: ObstacleId,
+        obstacle: Moving,
+    ) -> Result<(), ObstacleError> {
+        self.map.obstacles_mut().update(id, obstacle)?;
+        self.stale = true;
+        Ok(())
+    }
+
     fn reflag(&mut self) {
+        self.stale = false;
         let obstacles = self.map.obstacles();
         for store in [&mut *self.fwd, &mut *self.rev] {
             store
                 .tree
                 .reflag_edges(|a, b| obstacles.blocks_segment(a, b));
             store.restart_sweeps();
+        }
+    }
+
+    /// Applies the obstacle updates submitted since the last call: the edges are re-flagged,
+    /// and the rewiring sweeps restart only where a flag changed.
+    fn apply_updates<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>) {
+        if !self.stale {
+            return;
+        }
+        self.stale = false;
+        let obstacles = self.map.obstacles();
+        let k = obstacles.len();
+        for store in [&mut *self.fwd, &mut *self.rev] {
+            meter.charge(units(store.tree.len().saturating_mul(k.saturating_add(1))));
+            if store
+                .tree
+                .reflag_edges(|a, b| obstacles.blocks_segment(a, b))
+            {
+                store.restart_sweeps();
+            }
         }
     }
 
@@ -462,7 +539,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// # The waypoint rule
     ///
     /// The waypoint returned is reachable from `agent` over a segment free of the map and of
-    /// every dynamic obstacle present when `plan` returns. When the agent is off the root and
+    /// every dynamic obstacle present when `plan` returns (with moving obstacles and a stated
+    /// motion, also clear of their predicted sweeps: module [`crate::motion`]). When the agent is off the root and
     /// cannot reach it (an obstacle dropped between them, or an agent that is not where the
     /// tree thinks), the tree is first re-rooted at the agent: a node at the agent's position
     /// joins the tree below the cheapest node within `e_max` that it sees past the map (the new
@@ -527,7 +605,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.call = Deadline::after(clock, self.cfg.budget.t_exp);
         self.deferred = false;
         let meter = self.meter(clock);
-        let trapped = self.map.obstacles().contains(agent);
+        self.apply_updates(&meter);
+        let trapped = self.map.obstacles().contains_now(agent);
         if !trapped {
             self.anchor(agent, &meter);
         }
@@ -552,6 +631,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     pub fn grow<C: Clock + ?Sized>(&mut self, clock: &C) -> Progress {
         self.call = Deadline::after(clock, self.cfg.budget.t_exp);
         let meter = self.meter(clock);
+        self.apply_updates(&meter);
         let expansions = self.expand_for(&meter, None, &mut false);
         self.keep_rate(&meter, clock);
         self.progress(None, expansions, false, &meter)
@@ -628,22 +708,40 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let root = self.root_position();
         let at = agent.unwrap_or(root);
         let arrived = goal_node.is_some() && self.goal.is_some_and(|g| g.pos == at);
-        let waypoint = match agent {
-            Some(a) if arrived || (a != root && !self.map.free_path(a, root)) => a,
-            _ => root,
+        let trapped = agent.is_some() && self.map.obstacles().contains_now(at);
+        // The waypoint rule (module `motion`): the root when it is clear, else a nearer point
+        // on the way, else hold, else evade.
+        let planned = if arrived { at } else { root };
+        let choice = match agent {
+            Some(a) if !trapped => {
+                meter.charge(units(K.saturating_mul(64)));
+                choose(&self.map, &self.cfg.motion, a, planned)
+            }
+            Some(_) => Choice::Hold,
+            None => Choice::Planned,
         };
+        let waypoint = match choice {
+            Choice::Planned => planned,
+            Choice::Shortened(q) | Choice::Evade(q) => q,
+            Choice::Hold | Choice::Cornered => at,
+        };
+        let blocked_now = agent.is_some_and(|a| a != root && !self.map.free_now(a, root));
         let status = match self.goal {
             None => Status::NoGoal,
-            Some(_) if agent.is_some() && self.map.obstacles().contains(at) => {
-                Status::Waiting(Wait::AgentInObstacle)
-            }
+            Some(_) if trapped => Status::Waiting(Wait::AgentInObstacle),
             Some(_) if arrived => Status::Arrived,
-            Some(_) if agent.is_some_and(|a| a != root && waypoint == a) => {
+            Some(_) if matches!(choice, Choice::Cornered) => Status::Waiting(Wait::Cornered),
+            Some(_) if matches!(choice, Choice::Evade(_)) => Status::Evading,
+            Some(_) if matches!(choice, Choice::Hold) && blocked_now => {
                 Status::Waiting(Wait::AgentBlocked)
+            }
+            Some(_) if matches!(choice, Choice::Hold) && agent != Some(root) => {
+                Status::Waiting(Wait::GivingWay)
             }
             Some(g) if !self.metric.distance(at, g.pos).is_finite() => Status::Unreachable,
             Some(_) if goal_node.is_none() => Status::Searching,
             Some(_) if goal_cost.is_some_and(|c| c.blocked) => Status::Waiting(Wait::PathBlocked),
+            Some(_) if matches!(choice, Choice::Hold) => Status::Waiting(Wait::GivingWay),
             Some(_) if self.deferred && agent == Some(root) => Status::Waiting(Wait::OutOfTime),
             Some(_) => Status::Following,
         };
@@ -666,7 +764,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     fn anchor<C: Clock + ?Sized>(&mut self, agent: Point, meter: &Meter<'_, C>) {
         let root = self.root_position();
         meter.charge(12);
-        if agent == root || self.map.free_path(agent, root) {
+        if agent == root || self.map.free_now(agent, root) {
             return;
         }
         // The agent stands on a node: that node becomes the root.

@@ -422,11 +422,13 @@ impl<const N: usize> Tree<N> {
     }
 
     /// Sets every edge's blocked flag from `blocked(parent position, child position)` and then
-    /// recomputes every cost: O(N) calls. Used when dynamic obstacles appear or disappear.
-    pub fn reflag_edges<F>(&mut self, mut blocked: F)
+    /// recomputes every cost: O(N) calls. Used when dynamic obstacles appear, move or
+    /// disappear. Returns whether some flag changed.
+    pub fn reflag_edges<F>(&mut self, mut blocked: F) -> bool
     where
         F: FnMut(Point, Point) -> bool,
     {
+        let mut changed = false;
         for v in 0..self.len {
             let p = rd_link(&self.parent, v as usize);
             let b = p != NONE
@@ -434,9 +436,11 @@ impl<const N: usize> Tree<N> {
                     rd(&self.pos, p as usize, Point::ZERO),
                     rd(&self.pos, v as usize, Point::ZERO),
                 );
+            changed |= (rd(&self.flags, v as usize, 0) & EDGE_BLOCKED != 0) != b;
             self.set_flag(v, EDGE_BLOCKED, b);
         }
         self.refresh_subtree(self.root);
+        changed
     }
 
     /// `SetRoot`: re-roots the tree at `new_root` by reversing the edges on the path from the

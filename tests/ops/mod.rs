@@ -7,7 +7,9 @@
 //! may be anything valid), a tiny or small arena, and then a sequence of operations: set,
 //! change or clear the goal; plan with the agent moved towards its waypoint, teleported, or
 //! placed anywhere (outside the map, NaN); grow; add circles anywhere (on the agent, between
-//! the agent and its waypoint, on the goal) and remove them; read the path; all with frozen,
+//! the agent and its waypoint, on the goal), still or moving, submit new states for them, and
+//! remove them; a stated motion (agent and obstacle speeds, period, horizon); read the path;
+//! all with frozen,
 //! stepping, work-driven and jumping clocks. After every operation both trees must be valid, and
 //! after every `plan` the waypoint rule must hold: the waypoint is the agent's position or
 //! reachable from it over a segment free of the map and every circle present.
@@ -19,7 +21,7 @@ use bi_am_rrt::builtin;
 use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::map::{ObstacleId, OccupancyGrid, pack_grid};
 use bi_am_rrt::metric::{DiffusionTable, ElementKind, TableHeader, write_table};
-use bi_am_rrt::{Circle, Config, Euclidean, Map, Metric, Planner, Point, Storage};
+use bi_am_rrt::{Circle, Config, Euclidean, Map, Metric, Moving, Planner, Point, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
@@ -202,12 +204,34 @@ fn run_with<M: Metric>(
         alg6_clear: third & 128 != 0,
         meet_all_pairs: third & 8 != 0,
     };
+    // A fourth byte: a stated motion (module `motion`), any valid values.
+    if b.u8() & 1 != 0 {
+        cfg.motion = bi_am_rrt::Motion {
+            agent_speed: b.unit() * 3.0,
+            period: b.unit() * 0.5,
+            horizon: b.unit() * 3.0,
+            obstacle_speed: b.unit() * 3.0,
+        };
+    }
     let seed = b.u16() as u64;
     let start = b.point(w, h);
     match b.u8() % 3 {
         0 => drive::<_, 64, 16>(grid, metric, cfg, seed, start, b),
         1 => drive::<_, 8, 2>(grid, metric, cfg, seed, start, b),
         _ => drive::<_, 2, 1>(grid, metric, cfg, seed, start, b),
+    }
+}
+
+/// A moving obstacle's report from the bytes: a velocity up to the map's size per second and
+/// a horizon, either sometimes not finite.
+fn moving(b: &mut Bytes<'_>, c: Circle, w: f32, h: f32) -> Moving {
+    let v = Point::new(b.coord(w) - 0.5 * w, b.coord(h) - 0.5 * h);
+    let m = Moving::new(c, v);
+    match b.u8() % 4 {
+        0 => m,
+        1 => m.trusted_for(b.unit() * 5.0),
+        2 => m.trusted_for(f32::NAN),
+        _ => m.trusted_for(-1.0),
     }
 }
 
@@ -236,7 +260,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             break;
         }
         let op = b.u8();
-        match op % 12 {
+        match op % 13 {
             0 => {
                 let g = b.point(w, h);
                 let _ = p.set_goal(g);
@@ -245,7 +269,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             2..=5 => {
                 // Plan: the agent moves towards its last waypoint (most often), teleports, or
                 // is placed anywhere.
-                let next = match op % 12 {
+                let next = match op % 13 {
                     2 | 3 => agent.step_towards(waypoint, 0.1 + b.unit() * cfg.search.e_max),
                     4 => b.point(w, h),
                     _ => p.root_position(),
@@ -260,7 +284,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                     Ok(pr) => {
                         agent = next;
                         waypoint = pr.waypoint;
-                        if pr.waypoint != agent && !p.map().free_path(agent, pr.waypoint) {
+                        if pr.waypoint != agent && !p.map().free_now(agent, pr.waypoint) {
                             return Err(format!(
                                 "waypoint {:?} not reachable from {agent:?}: {pr:?}",
                                 pr.waypoint
@@ -283,12 +307,17 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             7..=9 => {
                 // A circle: anywhere, on the agent, between agent and waypoint, on the goal.
                 let r = b.unit() * w.max(h) * 0.1;
-                let c = match op % 12 {
+                let c = match op % 13 {
                     7 => b.point(w, h),
                     8 => agent.lerp(waypoint, b.unit()),
                     _ => p.goal().unwrap_or(agent),
                 };
-                if let Ok(id) = p.add_obstacle(Circle::new(c, r)) {
+                let added = if b.u8().is_multiple_of(2) {
+                    p.add_obstacle(Circle::new(c, r))
+                } else {
+                    p.add_moving_obstacle(moving(b, Circle::new(c, r), w, h))
+                };
+                if let Ok(id) = added {
                     ids.push(id);
                 }
             }
@@ -298,8 +327,20 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                     p.remove_obstacle(id).map_err(|e| format!("remove: {e}"))?;
                 }
             }
-            _ => {
+            11 => {
                 let _ = p.path(&mut path);
+            }
+            _ => {
+                // Submit a new state for an obstacle (or an unknown id): moved anywhere, any
+                // velocity and horizon, sometimes not finite.
+                let id = if ids.is_empty() || b.u8() == 0 {
+                    ObstacleId(b.u16() as u32)
+                } else {
+                    ids[b.u8() as usize % ids.len()]
+                };
+                let r = b.unit() * w.max(h) * 0.1;
+                let c = b.point(w, h);
+                let _ = p.update_obstacle(id, moving(b, Circle::new(c, r), w, h));
             }
         }
         p.tree()

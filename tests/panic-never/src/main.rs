@@ -14,10 +14,10 @@ use core::time::Duration;
 use bi_am_rrt::agent::{Protocol, run_to_goal};
 use bi_am_rrt::clock::{Clock, Deadline, FakeClock};
 use bi_am_rrt::index::SpatialIndex;
-use bi_am_rrt::map::{OccupancyGrid, pack_grid};
+use bi_am_rrt::map::{ObstacleId, OccupancyGrid, pack_grid};
 use bi_am_rrt::metric::{DiffusionTable, ElementKind, TableHeader, write_table};
 use bi_am_rrt::tree::{NodeId, Tree};
-use bi_am_rrt::{Circle, Config, Euclidean, Map, Metric, Planner, Point, Storage};
+use bi_am_rrt::{Circle, Config, Euclidean, Map, Metric, Motion, Moving, Planner, Point, Storage};
 use cortex_m_rt::entry;
 #[cfg(feature = "check")]
 use panic_never as _;
@@ -42,7 +42,13 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     grid: OccupancyGrid<'_>,
     metric: M,
 ) -> u32 {
-    let cfg = black_box(Config::table1()[black_box(7usize) % 20]);
+    let mut cfg = black_box(Config::table1()[black_box(7usize) % 20]);
+    cfg.motion = black_box(Motion {
+        agent_speed: 1.0,
+        period: 0.1,
+        horizon: 1.0,
+        obstacle_speed: 1.5,
+    });
     let _ = black_box(cfg.validate());
     let rng = XorShiftRng::seed_from_u64(black_box(1));
     let Ok(mut p) =
@@ -61,6 +67,15 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     if let Ok(id) = p.add_obstacle(Circle::new(point(), black_box(0.5))) {
         let _ = p.plan(&clock, point());
         let _ = p.remove_obstacle(id);
+    }
+    // Moving obstacles (module `motion`): added, updated, planned against.
+    let walker =
+        Moving::new(Circle::new(point(), black_box(0.4)), point()).trusted_for(black_box(2.0));
+    if let Ok(id) = p.add_moving_obstacle(walker) {
+        let _ = p.update_obstacle(id, black_box(walker));
+        let _ = p.plan(&clock, point());
+        let _ = p.update_obstacle(black_box(ObstacleId(7)), walker);
+        let _ = p.grow(&clock);
     }
     let _ = run_to_goal(
         &mut p,

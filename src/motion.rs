@@ -1,0 +1,380 @@
+//! Moving obstacles (beyond the paper): the waypoint rule of Algorithm 1 generalised from
+//! circles that stay put to obstacles that move with a reported velocity
+//! ([`crate::map::Moving`]) and an agent with a stated top speed ([`crate::config::Motion`]).
+//!
+//! The paper hands the agent the root when the segment to it meets no circle present. Here a
+//! point `q` is *clear* for an agent at `a` when
+//!
+//! 1. the segment `a-q` is free of the map;
+//! 2. it meets no obstacle's sweep ([`crate::map::Moving::sweep`]) over
+//!    `[0, |q - a| / agent_speed + period + horizon]`: the time the agent needs to drive it at
+//!    its top speed, the wait there until the next call, and the `horizon` it keeps clear
+//!    after that (so it gives way to what is predicted to cross its way soon);
+//! 3. its first `agent_speed * period` metres (where the agent can be before the next call)
+//!    meet no disc grown by `obstacle_speed * period`: wherever an obstacle turns without
+//!    notice, within the stated top speed, the agent does not drive into it before it plans
+//!    again.
+//!
+//! Clearness is monotone along a segment (a nearer `q` has a shorter segment and a shorter
+//! window, so a smaller sweep to miss), so the farthest clear point of a segment is found by
+//! bisection. The choice, made last in every `plan` call ([`choose`]):
+//!
+//! - the planned waypoint (the root) when it is clear;
+//! - else, when the segment to it is free now and only the prediction blocks it, the farthest
+//!   clear point of that segment (the agent moves up and stops short of the crossing);
+//! - else the agent holds when its own position is clear ([`crate::Wait::GivingWay`]);
+//! - else it evades ([`crate::Status::Evading`]): among points 1, 4 and 10 periods' drive away
+//!   in [`ESCAPES`] directions, and the agent's own position, the one that stays clear the
+//!   longest (levels of the full window halved [`LEVELS`] times), nearest the planned waypoint
+//!   among equals. An escape is judged by timing, not by the whole sweep: against where each
+//!   obstacle is when the agent, driving at its top speed, is where it is (rules 1 and 3
+//!   still hold), so a step aside counts when the agent has left the spot before the obstacle
+//!   gets there;
+//! - when none is clear even for the drive alone, the agent holds
+//!   ([`crate::Wait::Cornered`]): an obstacle may run into it, it does not drive into one.
+//!
+//! With still circles and nothing stated ([`crate::config::Motion::NONE`]) rule 2 is the
+//! paper's test and rule 3 that the agent is outside every circle: the choice is the paper's.
+//! The work is bounded: at most `(3 ESCAPES + 1) (LEVELS + 1) + BISECTIONS + 2` tests of the
+//! `K` obstacles and `3 ESCAPES + BISECTIONS + 2` grid segments.
+
+use crate::config::Motion;
+use crate::geometry::{Point, segment_point_dist_sq};
+use crate::map::Map;
+
+/// Escape points tried round the agent when it can neither go on nor hold.
+pub const ESCAPES: u16 = 16;
+
+/// Halvings of the full window tried when ranking the escapes.
+pub const LEVELS: u16 = 4;
+
+/// Bisection steps for the farthest clear point of a segment.
+const BISECTIONS: u16 = 12;
+
+/// Escape distances, in periods of driving at the top speed.
+const REACHES: [f32; 3] = [1.0, 4.0, 10.0];
+
+/// `a - b`, component-wise.
+fn diff(a: Point, b: Point) -> Point {
+    Point::new(a.x - b.x, a.y - b.y)
+}
+
+/// What the waypoint rule chose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Choice {
+    /// The planned waypoint is clear.
+    Planned,
+    /// The farthest clear point on the way to the planned waypoint.
+    Shortened(Point),
+    /// The agent holds: its position is clear, the way is not.
+    Hold,
+    /// A point off the way that stays clear longer than holding would.
+    Evade(Point),
+    /// Nothing is clear: the agent holds.
+    Cornered,
+}
+
+/// The rule's view of one call: the map and the stated motion.
+struct Rule<'a, 'm, const K: usize> {
+    map: &'a Map<'m, K>,
+    motion: &'a Motion,
+}
+
+impl<const K: usize> Rule<'_, '_, K> {
+    /// Seconds to drive `d` metres at the top speed (0 when no speed is stated).
+    fn drive(&self, d: f32) -> f32 {
+        if self.motion.agent_speed > 0.0 {
+            d / self.motion.agent_speed
+        } else {
+            0.0
+        }
+    }
+
+    /// Rule 3: the first period's drive along `a-q` meets no disc grown by what its obstacle
+    /// can cover in a period at the stated top speed, or, for an agent already inside such a
+    /// disc, heads away from it: `(q - a) . (a - c) >= |q - a| g` with `g` that growth, so
+    /// that at every instant the agent is farther from any position the obstacle can take
+    /// than it would be holding (a step that is never worse than holding).
+    fn first_period(&self, a: Point, q: Point) -> bool {
+        let m = self.motion;
+        let (d, reach) = (a.dist(q), m.agent_speed * m.period);
+        let prefix = if d > reach && d > 0.0 {
+            a.lerp(q, reach / d)
+        } else {
+            q
+        };
+        let grow = m.obstacle_speed * m.period;
+        !self.map.obstacles().iter().any(|(_, c)| {
+            let r = c.radius + grow;
+            segment_point_dist_sq(a, prefix, c.center) <= r * r
+                && !(d > 0.0 && diff(q, a).dot(diff(a, c.center)) >= d * grow && !c.contains(a))
+        })
+    }
+
+    /// Whether `a-q` is clear with `extra` seconds kept clear after the drive: rules 1-3 of
+    /// the module docs (the full rule is `extra = period + horizon`).
+    fn clear(&self, a: Point, q: Point, extra: f32) -> bool {
+        self.map.grid().segment_free(a, q)
+            && !self
+                .map
+                .obstacles()
+                .blocks_within(a, q, self.drive(a.dist(q)) + extra)
+            && self.first_period(a, q)
+    }
+
+    /// Rules 1 and 3 for a candidate escape
+    /// (and the segment free of every disc where it is now, as every waypoint is).
+    fn passable(&self, a: Point, q: Point) -> bool {
+        self.map.free_now(a, q) && self.first_period(a, q)
+    }
+
+    /// Evasion's test: like [`Rule::clear`], but against where each obstacle is when the
+    /// agent, driving `a-q` at its top speed and then waiting `extra` seconds at `q`, is
+    /// where it is (the relative motion, piece by piece), not against the whole sweep: a
+    /// step aside is clear when the agent has left the spot before the obstacle gets there.
+    /// Returns the least gap (distance less radius, negative in contact) over that time.
+    /// Rules 1 and 3 are checked once per candidate ([`Rule::passable`]), not here.
+    fn timed_gap(&self, a: Point, q: Point, extra: f32) -> f32 {
+        let t_drive = self.drive(a.dist(q));
+        let end = t_drive + extra;
+        let at = |t: f32| {
+            if t_drive > 0.0 && t < t_drive {
+                a.lerp(q, t / t_drive)
+            } else {
+                q
+            }
+        };
+        let bound = self.map.obstacles().sweep().1;
+        let mut gap = f32::INFINITY;
+        for (_, o) in self.map.obstacles().iter_moving() {
+            let h = o.trusted_for;
+            let place = |t: f32| {
+                let k = t.min(h);
+                let c = o.circle.center;
+                Point::new(c.x + o.velocity.x * k, c.y + o.velocity.y * k)
+            };
+            // Pieces end where a motion changes: the end of the drive and of the prediction.
+            let (c0, c1) = (t_drive.min(end), h.min(end));
+            let mut t0 = 0.0f32;
+            for t1 in [c0.min(c1), c0.max(c1), end] {
+                let r = o.circle.radius + bound * (t1 - h).max(0.0);
+                let (p0, p1) = (diff(at(t0), place(t0)), diff(at(t1), place(t1)));
+                t0 = t1;
+                gap =
+                    gap.min(crate::geometry::sqrt(segment_point_dist_sq(p0, p1, Point::ZERO)) - r);
+            }
+        }
+        gap
+    }
+}
+
+/// The waypoint rule (module docs) for an agent at `agent` whose planned waypoint is
+/// `planned` (the root, or the agent's own position when it holds).
+pub fn choose<const K: usize>(
+    map: &Map<'_, K>,
+    motion: &Motion,
+    agent: Point,
+    planned: Point,
+) -> Choice {
+    let rule = Rule { map, motion };
+    let full = motion.period + motion.horizon;
+    if rule.clear(agent, planned, full) {
+        return Choice::Planned;
+    }
+    if planned != agent && map.free_now(agent, planned) {
+        // Bisection on the fraction of the way: `lo` clear, `hi` not.
+        let (mut lo, mut hi) = (0.0f32, 1.0f32);
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if rule.clear(agent, agent.lerp(planned, mid), full) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let q = agent.lerp(planned, lo);
+        let cell = map.grid().cell_size();
+        if lo > 0.0 && q.dist_sq(agent) > 1e-4 * cell * cell && rule.clear(agent, q, full) {
+            return Choice::Shortened(q);
+        }
+    }
+    if rule.clear(agent, agent, full) {
+        return Choice::Hold;
+    }
+    // Evade: the candidate that stays clear the longest; among those clear for the full
+    // window the nearest the planned waypoint, among the others the one with the widest gap.
+    let step = motion.agent_speed * motion.period;
+    let mut best: Option<(u16, f32, Point)> = None;
+    for i in 0..=ESCAPES {
+        let reaches = if i == 0 || step <= 0.0 {
+            1
+        } else {
+            REACHES.len()
+        };
+        for &k in REACHES.iter().take(reaches) {
+            let q = if i == 0 || step <= 0.0 {
+                agent
+            } else {
+                let angle = f32::from(i) * (core::f32::consts::TAU / f32::from(ESCAPES));
+                let r = step * k;
+                Point::new(
+                    agent.x + libm::cosf(angle) * r,
+                    agent.y + libm::sinf(angle) * r,
+                )
+            };
+            if !rule.passable(agent, q) {
+                continue;
+            }
+            // Level l keeps `full / 2^(LEVELS - l)` clear after the drive (0: the drive alone).
+            let mut level = None;
+            let mut extra = full;
+            let mut gap = 0.0;
+            for l in (0..=LEVELS).rev() {
+                let g = rule.timed_gap(agent, q, if l == 0 { 0.0 } else { extra });
+                if l == LEVELS {
+                    gap = g;
+                }
+                if g > 0.0 {
+                    level = Some(l);
+                    break;
+                }
+                extra *= 0.5;
+            }
+            let Some(level) = level else { continue };
+            let score = if level == LEVELS {
+                -q.dist_sq(planned)
+            } else {
+                gap
+            };
+            if best.is_none_or(|(l, s, _)| level > l || (level == l && score > s)) {
+                best = Some((level, score, q));
+            }
+        }
+        if step <= 0.0 {
+            break;
+        }
+    }
+    match best {
+        Some((_, _, q)) if q == agent => Choice::Hold,
+        Some((_, _, q)) => Choice::Evade(q),
+        None => Choice::Cornered,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::{Circle, Moving, OccupancyGrid};
+
+    /// An open 10 m x 10 m map of 0.1 m cells.
+    fn open() -> OccupancyGrid<'static> {
+        static BITS: [u8; OccupancyGrid::bytes_needed(100, 100)] =
+            [0; OccupancyGrid::bytes_needed(100, 100)];
+        OccupancyGrid::new(&BITS, 100, 100, 0.1).unwrap()
+    }
+
+    fn walking() -> Motion {
+        Motion {
+            agent_speed: 1.0,
+            period: 0.1,
+            horizon: 1.0,
+            obstacle_speed: 1.5,
+        }
+    }
+
+    #[test]
+    fn still_circles_with_nothing_stated_keep_the_papers_rule() {
+        let mut map: Map<'_, 4> = Map::new(open());
+        map.obstacles_mut()
+            .add(Circle::new(Point::new(5.0, 5.0), 0.5))
+            .unwrap();
+        let (a, none) = (Point::new(2.0, 5.0), Motion::NONE);
+        assert_eq!(
+            choose(&map, &none, a, Point::new(8.0, 8.0)),
+            Choice::Planned
+        );
+        // Blocked now: the agent holds (no creeping up to a circle that stays).
+        assert_eq!(choose(&map, &none, a, Point::new(8.0, 5.0)), Choice::Hold);
+        assert_eq!(choose(&map, &none, a, a), Choice::Planned);
+    }
+
+    #[test]
+    fn a_crossing_walker_shortens_the_way() {
+        let mut map: Map<'_, 4> = Map::new(open());
+        let m = walking();
+        map.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);
+        // A walker 3 m below the way, crossing it at 1 m/s.
+        let walker = Moving::new(Circle::new(Point::new(5.0, 2.0), 0.5), Point::new(0.0, 1.0));
+        map.obstacles_mut().add_moving(walker).unwrap();
+        let (a, root) = (Point::new(2.0, 5.0), Point::new(8.0, 5.0));
+        // Still, it would not be in the way.
+        assert!(map.free_now(a, root));
+        // On a collision course (both at x = 5 at t = 3 s): the way is clear up to where the
+        // walker's line is within its radius, x = 4.5 (its sweep over the drive and 1.1 s
+        // reaches y = 4.5 from x = 3.4 on).
+        match choose(&map, &m, a, root) {
+            Choice::Shortened(q) => {
+                assert!(
+                    (q.y - 5.0).abs() < 1e-4 && q.x > 4.45 && q.x <= 4.5,
+                    "{q:?}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        // Once it has passed (moving away, its sweep behind the way), the root is clear.
+        let past = Moving::new(Circle::new(Point::new(5.0, 6.0), 0.5), Point::new(0.0, 1.0));
+        let mut map2: Map<'_, 4> = Map::new(open());
+        map2.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);
+        map2.obstacles_mut().add_moving(past).unwrap();
+        assert_eq!(choose(&map2, &m, a, root), Choice::Planned);
+    }
+
+    #[test]
+    fn a_walker_head_on_makes_the_agent_step_aside() {
+        let mut map: Map<'_, 4> = Map::new(open());
+        let m = walking();
+        map.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);
+        // 1.2 m ahead, walking at the agent at 1.5 m/s (faster than the agent).
+        let walker = Moving::new(
+            Circle::new(Point::new(6.2, 5.0), 0.4),
+            Point::new(-1.5, 0.0),
+        );
+        map.obstacles_mut().add_moving(walker).unwrap();
+        let a = Point::new(5.0, 5.0);
+        match choose(&map, &m, a, a) {
+            Choice::Evade(q) => {
+                // Aside: off the walker's line by more than its radius once there.
+                assert!((q.y - 5.0).abs() > 0.4, "{q:?}");
+                let rule = Rule {
+                    map: &map,
+                    motion: &m,
+                };
+                assert!(rule.timed_gap(a, q, 0.0) > 0.0);
+                assert!(map.free_now(a, q));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn within_reach_the_agent_may_only_step_away() {
+        let mut map: Map<'_, 4> = Map::new(open());
+        let m = walking();
+        map.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);
+        // Still, but 0.6 m away with radius 0.5: within 0.5 + 0.15 of the agent.
+        let c = Point::new(5.6, 5.0);
+        map.obstacles_mut().add(Circle::new(c, 0.5)).unwrap();
+        let a = Point::new(5.0, 5.0);
+        let rule = Rule {
+            map: &map,
+            motion: &m,
+        };
+        assert!(!rule.first_period(a, a), "holding is within its reach");
+        assert!(rule.first_period(a, Point::new(4.0, 5.0)), "straight away");
+        assert!(
+            !rule.first_period(a, Point::new(5.0, 6.0)),
+            "sideways is not away enough"
+        );
+        assert!(!rule.first_period(a, Point::new(5.3, 5.0)), "towards it");
+    }
+}
