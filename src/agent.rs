@@ -7,7 +7,7 @@
 //!    that moment, not at the end of the call);
 //! 4. the agent starts moving once the goal is in the tree and `wait` has passed, then moves
 //!    `speed` metres towards the current waypoint per call (stopping on it when closer);
-//! 5. every motion segment is checked against the map and the dynamic obstacles present: a
+//! 5. every motion segment is checked against the map and the dynamic obstacles where they are: a
 //!    segment that is not free counts as a collision (the agent moves anyway, as a robot whose
 //!    planner failed would);
 //! 6. the run ends when the goal is in the tree and the agent stands on it, or after
@@ -122,7 +122,7 @@ where
                     res.cost_at_start = p.goal_cost.map(|c| c.length);
                 }
                 let step = agent.step_towards(p.waypoint, protocol.speed);
-                if !planner.map().free_path(agent, step) {
+                if !planner.map().free_now(agent, step) {
                     res.collisions = res.collisions.saturating_add(1);
                 }
                 res.travelled += agent.dist(step);

@@ -24,19 +24,20 @@
 //!   clear point of that segment (the agent moves up and stops short of the crossing);
 //! - else the agent holds when its own position is clear ([`crate::Wait::GivingWay`]);
 //! - else it evades ([`crate::Status::Evading`]): among points 1, 4 and 10 periods' drive away
-//!   in [`ESCAPES`] directions, and the agent's own position, the one that stays clear the
-//!   longest (levels of the full window halved [`LEVELS`] times), nearest the planned waypoint
-//!   among equals. An escape is judged by timing, not by the whole sweep: against where each
-//!   obstacle is when the agent, driving at its top speed, is where it is (rules 1 and 3
-//!   still hold), so a step aside counts when the agent has left the spot before the obstacle
-//!   gets there;
+//!   in [`ESCAPES`] directions, and the agent's own position, the one whose first contact with
+//!   an obstacle comes latest (clear at least while it drives there); among those clear for
+//!   the drive and the full window, the nearest the planned waypoint. An escape is judged by
+//!   timing, not by the whole sweep: against where each obstacle is when the agent, driving
+//!   at its top speed, is where it is (rules 1 and 3 still hold), so a step aside counts when
+//!   the agent has left the spot before the obstacle gets there;
 //! - when none is clear even for the drive alone, the agent holds
 //!   ([`crate::Wait::Cornered`]): an obstacle may run into it, it does not drive into one.
 //!
 //! With still circles and nothing stated ([`crate::config::Motion::NONE`]) rule 2 is the
 //! paper's test and rule 3 that the agent is outside every circle: the choice is the paper's.
-//! The work is bounded: at most `(3 ESCAPES + 1) (LEVELS + 1) + BISECTIONS + 2` tests of the
-//! `K` obstacles and `3 ESCAPES + BISECTIONS + 2` grid segments.
+//! The work is bounded: at most `3 ESCAPES + BISECTIONS + 3` tests of the `K` obstacles (an
+//! escape's: three pieces of relative motion each) and as many grid segments; the planner
+//! keeps time for it before its deadline ([`RULE_UNITS`] per obstacle).
 
 use crate::config::Motion;
 use crate::geometry::{Point, segment_point_dist_sq};
@@ -45,8 +46,9 @@ use crate::map::Map;
 /// Escape points tried round the agent when it can neither go on nor hold.
 pub const ESCAPES: u16 = 16;
 
-/// Halvings of the full window tried when ranking the escapes.
-pub const LEVELS: u16 = 4;
+/// Work units the planner keeps per obstacle for this rule before its deadline (the escapes'
+/// tests: about 50 candidates, three pieces each, plus their grid segments).
+pub const RULE_UNITS: u64 = 48;
 
 /// Bisection steps for the farthest clear point of a segment.
 const BISECTIONS: u16 = 12;
@@ -129,14 +131,13 @@ impl<const K: usize> Rule<'_, '_, K> {
     }
 
     /// Evasion's test: like [`Rule::clear`], but against where each obstacle is when the
-    /// agent, driving `a-q` at its top speed and then waiting `extra` seconds at `q`, is
-    /// where it is (the relative motion, piece by piece), not against the whole sweep: a
-    /// step aside is clear when the agent has left the spot before the obstacle gets there.
-    /// Returns the least gap (distance less radius, negative in contact) over that time.
+    /// agent, driving `a-q` at its top speed and then waiting at `q`, is where it is (the
+    /// relative motion, piece by piece), not against the whole sweep: a step aside counts when
+    /// the agent has left the spot before the obstacle gets there. Returns the first time
+    /// (seconds from now) any obstacle touches the agent, or `end` when none does before.
     /// Rules 1 and 3 are checked once per candidate ([`Rule::passable`]), not here.
-    fn timed_gap(&self, a: Point, q: Point, extra: f32) -> f32 {
-        let t_drive = self.drive(a.dist(q));
-        let end = t_drive + extra;
+    fn first_contact(&self, a: Point, q: Point, end: f32) -> f32 {
+        let t_drive = self.drive(a.dist(q)).min(end);
         let at = |t: f32| {
             if t_drive > 0.0 && t < t_drive {
                 a.lerp(q, t / t_drive)
@@ -145,7 +146,7 @@ impl<const K: usize> Rule<'_, '_, K> {
             }
         };
         let bound = self.map.obstacles().sweep().1;
-        let mut gap = f32::INFINITY;
+        let mut first = end;
         for (_, o) in self.map.obstacles().iter_moving() {
             let h = o.trusted_for;
             let place = |t: f32| {
@@ -154,17 +155,32 @@ impl<const K: usize> Rule<'_, '_, K> {
                 Point::new(c.x + o.velocity.x * k, c.y + o.velocity.y * k)
             };
             // Pieces end where a motion changes: the end of the drive and of the prediction.
-            let (c0, c1) = (t_drive.min(end), h.min(end));
+            let (c0, c1) = (t_drive, h.min(end));
             let mut t0 = 0.0f32;
             for t1 in [c0.min(c1), c0.max(c1), end] {
+                if t0 >= first {
+                    break;
+                }
+                // The radius at the piece's end (it only grows): conservative within it.
                 let r = o.circle.radius + bound * (t1 - h).max(0.0);
-                let (p0, p1) = (diff(at(t0), place(t0)), diff(at(t1), place(t1)));
+                let p0 = diff(at(t0), place(t0));
+                let d = diff(diff(at(t1), place(t1)), p0);
+                let (aa, b, c) = (d.dot(d), p0.dot(d), p0.dot(p0) - r * r);
+                let s = if c <= 0.0 {
+                    Some(0.0)
+                } else if aa > 0.0 && b < 0.0 && b * b - aa * c >= 0.0 {
+                    let s = (-b - crate::geometry::sqrt(b * b - aa * c)) / aa;
+                    (s <= 1.0).then_some(s.max(0.0))
+                } else {
+                    None
+                };
+                if let Some(s) = s {
+                    first = first.min(t0 + s * (t1 - t0));
+                }
                 t0 = t1;
-                gap =
-                    gap.min(crate::geometry::sqrt(segment_point_dist_sq(p0, p1, Point::ZERO)) - r);
             }
         }
-        gap
+        first
     }
 }
 
@@ -201,10 +217,11 @@ pub fn choose<const K: usize>(
     if rule.clear(agent, agent, full) {
         return Choice::Hold;
     }
-    // Evade: the candidate that stays clear the longest; among those clear for the full
-    // window the nearest the planned waypoint, among the others the one with the widest gap.
+    // Evade: the candidate whose first contact comes latest (clear during the drive at
+    // least); among those clear for the drive and the full window, the nearest the planned
+    // waypoint.
     let step = motion.agent_speed * motion.period;
-    let mut best: Option<(u16, f32, Point)> = None;
+    let mut best: Option<(f32, f32, Point)> = None;
     for i in 0..=ESCAPES {
         let reaches = if i == 0 || step <= 0.0 {
             1
@@ -225,29 +242,20 @@ pub fn choose<const K: usize>(
             if !rule.passable(agent, q) {
                 continue;
             }
-            // Level l keeps `full / 2^(LEVELS - l)` clear after the drive (0: the drive alone).
-            let mut level = None;
-            let mut extra = full;
-            let mut gap = 0.0;
-            for l in (0..=LEVELS).rev() {
-                let g = rule.timed_gap(agent, q, if l == 0 { 0.0 } else { extra });
-                if l == LEVELS {
-                    gap = g;
-                }
-                if g > 0.0 {
-                    level = Some(l);
-                    break;
-                }
-                extra *= 0.5;
+            let drive = rule.drive(agent.dist(q));
+            let end = drive + full;
+            let contact = rule.first_contact(agent, q, end);
+            if contact <= drive {
+                continue;
             }
-            let Some(level) = level else { continue };
-            let score = if level == LEVELS {
-                -q.dist_sq(planned)
+            // Clear for the whole window: rank by nearness, ahead of every partial one.
+            let (time, near) = if contact >= end {
+                (f32::INFINITY, -q.dist_sq(planned))
             } else {
-                gap
+                (contact, 0.0)
             };
-            if best.is_none_or(|(l, s, _)| level > l || (level == l && score > s)) {
-                best = Some((level, score, q));
+            if best.is_none_or(|(t, n, _)| time > t || (time == t && near > n)) {
+                best = Some((time, near, q));
             }
         }
         if step <= 0.0 {
@@ -349,7 +357,8 @@ mod tests {
                     map: &map,
                     motion: &m,
                 };
-                assert!(rule.timed_gap(a, q, 0.0) > 0.0);
+                let drive = rule.drive(a.dist(q));
+                assert!(rule.first_contact(a, q, drive + 1.0) > drive, "{q:?}");
                 assert!(map.free_now(a, q));
             }
             other => panic!("{other:?}"),

@@ -680,6 +680,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         } else {
             call
         };
+        // The waypoint rule's tests of moving obstacles run after the loop (module `motion`).
+        let obstacles = self.map.obstacles().len() as u64;
+        let steps = if obstacles > 0 && self.cfg.motion != crate::config::Motion::NONE {
+            meter.reserving(obstacles.saturating_mul(crate::motion::RULE_UNITS), steps)
+        } else {
+            steps
+        };
         while expansions < self.cfg.budget.max_expansions && !meter.expired(&steps) {
             let joined = self.goal_node().is_some();
             self.step(meter, steps);
@@ -714,7 +721,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let planned = if arrived { at } else { root };
         let choice = match agent {
             Some(a) if !trapped => {
-                meter.charge(units(K.saturating_mul(64)));
+                // The rule's tests of the obstacles (none to charge without obstacles: the
+                // paper's check of one segment, as before).
+                meter.charge(units(self.map.obstacles().len().saturating_mul(64)));
                 choose(&self.map, &self.cfg.motion, a, planned)
             }
             Some(_) => Choice::Hold,

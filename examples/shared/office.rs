@@ -4,11 +4,20 @@
 //! goals in turn) on the clock it is given, and prints the per-call times, the path and its
 //! checksum. The including crate provides `scenario` (the `host-sim export` statics) and
 //! `hprintln!` at its root. Also built for RISC-V (`tests/riscv-twin`'s `office`).
+//!
+//! With `BIAMRRT_WALKERS=n` at build time (1-8), `n` people pace to and fro at 1 m/s across
+//! the straight line from the start to goal 1 (6 m either side, evenly along it); before every
+//! call their positions and velocities are submitted (`update_obstacle`) under a stated motion
+//! (issue 27: the cost of moving obstacles on the chip). One protocol call is 0.5 s of the
+//! world's time (the agent's 0.7 m a call is 1.4 m/s).
 
 use bi_am_rrt::agent::{Protocol, run_to_goal};
 use bi_am_rrt::clock::Clock;
+use bi_am_rrt::map::ObstacleId;
 use bi_am_rrt::metric::fnv1a32;
-use bi_am_rrt::{Config, DiffusionTable, Map, MetricKind, OccupancyGrid, Planner, Point};
+use bi_am_rrt::{
+    Circle, Config, DiffusionTable, Map, MetricKind, Motion, Moving, OccupancyGrid, Planner, Point,
+};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
@@ -18,6 +27,30 @@ use crate::scenario;
 
 /// Most `plan` calls made per goal.
 const MAX_CALLS: u32 = 600;
+
+/// Seconds of the world per protocol call with walkers.
+const WORLD_PERIOD: f32 = 0.5;
+
+/// Walkers (`BIAMRRT_WALKERS`, 0-8).
+fn walker_count() -> usize {
+    option_env!("BIAMRRT_WALKERS")
+        .and_then(|v| v.parse::<usize>().ok())
+        .map_or(0, |n| n.min(8))
+}
+
+/// Walker `i` of `n` at world time `t`: pacing at 1 m/s over 12 m across the start-goal line.
+fn walker(i: usize, n: usize, start: Point, goal: Point, t: f32) -> Moving {
+    let d = goal - start;
+    let len = d.norm().max(1e-3);
+    let across = Point::new(-d.y / len, d.x / len);
+    let centre = start.lerp(goal, (i as f32 + 1.0) / (n as f32 + 1.0));
+    // Phase by index so that they do not move in step.
+    let x = t + 3.0 * i as f32;
+    let u = x - 24.0 * ((x / 24.0) as u32 as f32);
+    let (s, dir) = if u < 12.0 { (u, 1.0) } else { (24.0 - u, -1.0) };
+    let at = centre + across * (s - 6.0);
+    Moving::new(Circle::new(at, 0.5), across * dir)
+}
 
 /// Per-call times in 10 us bins from 148.00 ms: the median without keeping every call (the
 /// whole office sequence makes over a thousand), exact to 10 us when it falls in the bins.
@@ -101,7 +134,7 @@ pub fn exported_mission<C: Clock>(
         hprintln!("scenario: bad grid or table in flash");
         return false;
     };
-    let map: Map<'static, 4> = Map::new(grid);
+    let map: Map<'static, 8> = Map::new(grid);
     // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
     // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
     let base = Config::bi_am_rrt(MetricKind::Diffusion);
@@ -110,13 +143,36 @@ pub fn exported_mission<C: Clock>(
     } else {
         base
     };
-    let cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    let walkers = walker_count();
+    if walkers > 0 {
+        cfg.motion = Motion {
+            agent_speed: 0.7 / WORLD_PERIOD,
+            period: WORLD_PERIOD,
+            horizon: 1.5,
+            obstacle_speed: 1.5,
+        };
+    }
     let rng = XorShiftRng::seed_from_u64(1);
     let start = Point::new(scenario::START.0, scenario::START.1);
     let Ok(mut planner) = Planner::new(storage, map, table, rng, cfg, start) else {
         hprintln!("scenario: planner refused its start");
         return false;
     };
+    let first_goal = scenario::GOALS
+        .first()
+        .map_or(start, |&(x, y)| Point::new(x, y));
+    let mut ids = [ObstacleId(0); 8];
+    for (i, id) in ids.iter_mut().enumerate().take(walkers) {
+        match planner.add_moving_obstacle(walker(i, walkers, start, first_goal, 0.0)) {
+            Ok(got) => *id = got,
+            Err(_) => {
+                hprintln!("scenario: walker {} refused", i);
+                return false;
+            }
+        }
+    }
+    let mut world_calls = 0u32;
     let protocol = Protocol {
         max_calls: MAX_CALLS,
         ..Protocol::default()
@@ -149,6 +205,12 @@ pub fn exported_mission<C: Clock>(
                 trail = bytes
                     .iter()
                     .fold(trail, |h, &b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
+                // The walkers move on and are reported for the next call.
+                world_calls += 1;
+                let t = world_calls as f32 * WORLD_PERIOD;
+                for (i, &id) in ids.iter().enumerate().take(walkers) {
+                    let _ = p.update_obstacle(id, walker(i, walkers, start, first_goal, t));
+                }
                 last = clock.now();
             },
         );
@@ -211,6 +273,12 @@ pub fn exported_mission<C: Clock>(
             r.nodes_at_goal.unwrap_or(0),
             nodes,
             r.calls
+        );
+    }
+    if walkers > 0 {
+        hprintln!(
+            "{} walkers at 1 m/s across the way, updated before every call (motion stated)",
+            walkers
         );
     }
     let median = times.median();

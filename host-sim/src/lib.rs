@@ -37,6 +37,7 @@ pub mod graph;
 pub mod growth;
 pub mod maps;
 pub mod metrics;
+pub mod moving;
 pub mod optimum;
 #[cfg(feature = "sim")]
 pub mod report;

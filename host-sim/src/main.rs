@@ -86,6 +86,41 @@ enum Command {
               value_parser = clap::value_parser!(u32).range(1..))]
         animate: Option<u32>,
     },
+    /// People walking across and along the agent's first leg (issue 27): the same walkers
+    /// reported as still circles, with their velocity, and by an oracle; collisions by kind,
+    /// waiting time, travelled / optimal (runs.csv, summary.md, moving.png, pictures).
+    Moving {
+        /// A built-in scenario (default office_200) ...
+        #[arg(long, default_value = "office_200")]
+        builtin: String,
+        /// ... or a scenario from a file (with --scenario NAME).
+        #[arg(long)]
+        scenarios: Option<PathBuf>,
+        /// Scenario name in --scenarios.
+        #[arg(long)]
+        scenario: Option<String>,
+        /// Scenes: crossing, head-on (comma-separated).
+        #[arg(
+            long,
+            value_enum,
+            value_delimiter = ',',
+            default_value = "crossing,head-on"
+        )]
+        kinds: Vec<host_sim::moving::Kind>,
+        /// Seeds per scene and treatment.
+        #[arg(long, default_value_t = 10)]
+        seeds: u64,
+        /// Planning budget per call in ms on the virtual clock.
+        #[arg(long, default_value_t = 5)]
+        t_exp_ms: u64,
+        /// Output directory.
+        #[arg(long, default_value = "out/moving")]
+        out: PathBuf,
+        /// Also write an animated GIF of seed 0 (predicted) per scene, a frame every N calls.
+        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "5",
+              value_parser = clap::value_parser!(u32).range(1..))]
+        animate: Option<u32>,
+    },
     /// Run planners x scenarios x repeats and write runs.csv and summary.csv.
     Experiment {
         /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
@@ -529,6 +564,35 @@ fn main() -> Result<()> {
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 pace,
             })
+        }
+        Command::Moving {
+            builtin,
+            scenarios,
+            scenario,
+            kinds,
+            seeds,
+            t_exp_ms,
+            out,
+            animate,
+        } => {
+            let sc = match (scenarios, scenario) {
+                (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
+                (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
+                (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
+                (None, None) => maps::builtin_by_name(&builtin)?,
+            };
+            let prep = host_sim::sim::Prepared::new(sc);
+            host_sim::moving::moving(
+                &prep,
+                &host_sim::moving::MovingArgs {
+                    kinds,
+                    seeds,
+                    t_exp: std::time::Duration::from_millis(t_exp_ms),
+                    out,
+                    animate,
+                },
+            )?;
+            Ok(())
         }
         Command::Experiment {
             scenarios,

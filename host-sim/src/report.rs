@@ -27,13 +27,13 @@ use crate::results::{Manifest, Row, read_rows};
 use crate::stats::{Spread, mean, quantile};
 
 /// Something drawable on any plotters backend.
-trait Chart {
+pub(crate) trait Chart {
     fn size(&self) -> (u32, u32);
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>;
 }
 
 /// Writes `stem.svg` and `stem.png`.
-fn render(chart: &impl Chart, stem: &Path) -> Result<()> {
+pub(crate) fn render(chart: &impl Chart, stem: &Path) -> Result<()> {
     crate::draw::fonts();
     let (w, h) = chart.size();
     let svg = stem.with_extension("svg");
@@ -103,25 +103,25 @@ fn log_ticks(lo: f64, hi: f64) -> usize {
 }
 
 /// Groups of bars, one panel per (row, column).
-struct Bars {
-    title: String,
-    cols: usize,
-    panels: Vec<BarPanel>,
+pub(crate) struct Bars {
+    pub(crate) title: String,
+    pub(crate) cols: usize,
+    pub(crate) panels: Vec<BarPanel>,
 }
 
-struct BarPanel {
-    title: String,
-    y_label: String,
-    log: bool,
-    groups: Vec<String>,
+pub(crate) struct BarPanel {
+    pub(crate) title: String,
+    pub(crate) y_label: String,
+    pub(crate) log: bool,
+    pub(crate) groups: Vec<String>,
     /// Colour and name of each series (the legend box).
-    series: Vec<(RGBColor, String)>,
+    pub(crate) series: Vec<(RGBColor, String)>,
     /// A horizontal reference line and its legend entry (e.g. the exact optimum).
-    reference: Option<(f64, String)>,
+    pub(crate) reference: Option<(f64, String)>,
     /// `values[group][series]`.
-    values: Vec<Vec<Option<f64>>>,
+    pub(crate) values: Vec<Vec<Option<f64>>>,
     /// Text above each group (e.g. the change in percent).
-    notes: Vec<Option<String>>,
+    pub(crate) notes: Vec<Option<String>>,
 }
 
 impl Chart for Bars {

@@ -113,6 +113,7 @@ pub enum BoardError {
 pub fn planner(
     storage: &'static mut BoardStorage,
     tuned: bool,
+    motion: bi_am_rrt::Motion,
 ) -> Result<BoardPlanner, BoardError> {
     use rand_core::SeedableRng;
     let grid = OccupancyGrid::new(
@@ -125,7 +126,8 @@ pub fn planner(
     let table = DiffusionTable::new(&scenario::TABLE).map_err(|_| BoardError::Scenario)?;
     let base = Config::bi_am_rrt(MetricKind::Diffusion);
     let base = if tuned { base.tuned() } else { base };
-    let cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    cfg.motion = motion;
     let rng = XorShiftRng::seed_from_u64(1);
     Planner::new(storage, Map::new(grid), table, rng, cfg, start()).map_err(|_| BoardError::Setup)
 }

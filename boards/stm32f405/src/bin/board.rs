@@ -35,7 +35,7 @@ fn SysTick() {
 fn main() -> ! {
     let (mut dog, clock) = stm32f405_board::bring_up();
     let tuned = option_env!("BIAMRRT_TUNED").is_some();
-    let mut planner = match planner(STORAGE.take(), tuned) {
+    let mut planner = match planner(STORAGE.take(), tuned, bi_am_rrt::Motion::NONE) {
         Ok(planner) => planner,
         Err(e) => defmt::panic!("planner: {}", e),
     };

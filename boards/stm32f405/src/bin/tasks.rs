@@ -9,9 +9,13 @@
 //! - **Control loop** (an interrupt executor at [`CONTROL_PRIORITY`], preempting the planner):
 //!   every [`CONTROL_PERIOD_MS`], moves the (simulated) agent towards the waypoint at
 //!   [`SPEED`], whatever the planner is doing.
-//! - **Perception** (same interrupt executor): every [`SIGHTING_PERIOD_MS`] a person is seen at
-//!   a new free place 6-20 m from the agent, sent to the planner through a channel; the
-//!   planner moves its dynamic obstacle there (`remove_obstacle` + `add_obstacle`).
+//! - **Perception** (same interrupt executor): a person walks at [`PERSON_SPEED`] through the
+//!   map (turning at walls, and placed anew 6-20 m from the agent every [`SPAWN_PERIOD_MS`]);
+//!   every [`SIGHTING_PERIOD_MS`] its position and velocity go to the planner through a
+//!   channel, as a tracker reports them ([`bi_am_rrt::Moving`]); the planner submits them with
+//!   `update_obstacle` (O(K); applied at its next call) under a stated motion
+//!   ([`bi_am_rrt::Motion`]: the agent's speed, the period of a call, a 1.5 s horizon, people
+//!   at most 1.5 m/s), so it gives way to the person or steps aside (module `motion`).
 //!
 //! Priority rules for the planner's clock ([`bi_am_rrt::cortex::SysTickClock`]): SysTick must
 //! preempt everything that can run for a whole SysTick period (2^24 cycles, 99.9 ms at
@@ -33,7 +37,7 @@ use core::cell::Cell;
 use bi_am_rrt::clock::Clock;
 use bi_am_rrt::cortex::{SysTickClock, on_systick_wrap};
 use bi_am_rrt::geometry::unit_f32;
-use bi_am_rrt::{Circle, OccupancyGrid, Point};
+use bi_am_rrt::{Circle, Motion, Moving, OccupancyGrid, Point};
 use cortex_m_rt::exception;
 use defmt_rtt as _;
 use embassy_executor::{InterruptExecutor, Spawner};
@@ -58,7 +62,11 @@ const CONTROL_PERIOD_MS: u64 = 20;
 /// The agent's speed (m/s).
 const SPEED: f32 = 2.0;
 /// How often perception reports the person.
-const SIGHTING_PERIOD_MS: u64 = 3_000;
+const SIGHTING_PERIOD_MS: u64 = 200;
+/// How often the person is placed anew near the agent.
+const SPAWN_PERIOD_MS: u64 = 6_000;
+/// The person's walking speed (m/s).
+const PERSON_SPEED: f32 = 1.2;
 /// The person's radius (m).
 const PERSON_RADIUS: f32 = 1.0;
 /// The control loop's and perception's interrupt priority (above thread mode, below SysTick).
@@ -75,7 +83,7 @@ static AGENT: Shared<Point> =
 static WAYPOINT: Shared<Point> =
     Mutex::new(Cell::new(Point::new(scenario::START.0, scenario::START.1)));
 /// Sightings from perception to the planner.
-static SIGHTINGS: Channel<CriticalSectionRawMutex, Circle, 4> = Channel::new();
+static SIGHTINGS: Channel<CriticalSectionRawMutex, Moving, 4> = Channel::new();
 static CONTROL: InterruptExecutor = InterruptExecutor::new();
 static STORAGE: ConstStaticCell<BoardStorage> = ConstStaticCell::new(BoardStorage::new());
 static TIMES: ConstStaticCell<CallTimes<2048>> = ConstStaticCell::new(CallTimes::new());
@@ -94,7 +102,19 @@ fn SysTick() {
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let (dog, clock) = stm32f405_board::bring_up();
-    let planner = match planner(STORAGE.take(), option_env!("BIAMRRT_TUNED").is_some()) {
+    // The motion the planner is told: the agent's top speed, a call's period (t_exp plus the
+    // other tasks' share), how far ahead to give way, the people's top speed.
+    let motion = Motion {
+        agent_speed: SPEED,
+        period: 0.2,
+        horizon: 1.5,
+        obstacle_speed: 1.5,
+    };
+    let planner = match planner(
+        STORAGE.take(),
+        option_env!("BIAMRRT_TUNED").is_some(),
+        motion,
+    ) {
         Ok(planner) => planner,
         Err(e) => defmt::panic!("planner: {}", e),
     };
@@ -128,7 +148,8 @@ async fn control_loop() {
     }
 }
 
-/// Reports a person at a new free place 6-20 m from the agent every `SIGHTING_PERIOD_MS`.
+/// A person walking through the map, reported every `SIGHTING_PERIOD_MS` with its velocity;
+/// placed anew at a free place 6-20 m from the agent every `SPAWN_PERIOD_MS`.
 #[embassy_executor::task]
 async fn perception() {
     let Ok(grid) = OccupancyGrid::new(
@@ -140,19 +161,41 @@ async fn perception() {
         return;
     };
     let mut rng = XorShiftRng::seed_from_u64(7);
+    let dt = SIGHTING_PERIOD_MS as f32 / 1_000.0;
+    let mut person: Option<(Point, Point)> = None;
+    let mut since_spawn = SPAWN_PERIOD_MS;
     loop {
         Timer::after_millis(SIGHTING_PERIOD_MS).await;
+        since_spawn += SIGHTING_PERIOD_MS;
         let agent = AGENT.lock(Cell::get);
-        // Bounded: at most 64 draws per sighting; none free means no sighting this time.
-        for _ in 0..64 {
-            let r = 6.0 + 14.0 * unit_f32(&mut rng);
-            let a = core::f32::consts::TAU * unit_f32(&mut rng);
-            let c = agent + Point::new(r * libm::cosf(a), r * libm::sinf(a));
-            if grid.point_free(c) {
-                // A full channel means the planner is behind: drop this sighting.
-                let _ = SIGHTINGS.try_send(Circle::new(c, PERSON_RADIUS));
-                break;
+        let heading = |rng: &mut XorShiftRng| {
+            let a = core::f32::consts::TAU * unit_f32(rng);
+            Point::new(PERSON_SPEED * libm::cosf(a), PERSON_SPEED * libm::sinf(a))
+        };
+        if since_spawn >= SPAWN_PERIOD_MS {
+            since_spawn = 0;
+            // Bounded: at most 64 draws; none free means no person until the next spawn.
+            person = (0..64).find_map(|_| {
+                let r = 6.0 + 14.0 * unit_f32(&mut rng);
+                let a = core::f32::consts::TAU * unit_f32(&mut rng);
+                let c = agent + Point::new(r * libm::cosf(a), r * libm::sinf(a));
+                grid.point_free(c).then(|| (c, heading(&mut rng)))
+            });
+        } else if let Some((c, v)) = person.as_mut() {
+            // Walk on; at a wall, turn to a free heading (at most 8 tries, else stand).
+            let next = *c + *v * dt;
+            if grid.segment_free(*c, next) {
+                *c = next;
+            } else {
+                *v = (0..8)
+                    .map(|_| heading(&mut rng))
+                    .find(|h| grid.segment_free(*c, *c + *h * dt))
+                    .unwrap_or(Point::ZERO);
             }
+        }
+        if let Some((c, v)) = person {
+            // A full channel means the planner is behind: drop this sighting.
+            let _ = SIGHTINGS.try_send(Moving::new(Circle::new(c, PERSON_RADIUS), v));
         }
     }
 }
@@ -184,11 +227,12 @@ async fn planning(
         times.clear();
         let mut sightings = 0u32;
         loop {
-            while let Ok(circle) = SIGHTINGS.try_receive() {
-                if let Some(id) = person.take() {
-                    let _ = planner.remove_obstacle(id);
-                }
-                person = planner.add_obstacle(circle).ok();
+            while let Ok(seen) = SIGHTINGS.try_receive() {
+                // O(K) to submit; the planner applies it at its next call.
+                person = match person {
+                    Some(id) if planner.update_obstacle(id, seen).is_ok() => Some(id),
+                    _ => planner.add_moving_obstacle(seen).ok(),
+                };
                 sightings += 1;
             }
             let agent = AGENT.lock(Cell::get);
@@ -205,7 +249,7 @@ async fn planning(
             // The agent moved while the planner planned: hand over the waypoint only if the
             // segment from where it is now is free too, else hold it there.
             let now = AGENT.lock(Cell::get);
-            let waypoint = if planner.map().free_path(now, progress.waypoint) {
+            let waypoint = if planner.map().free_now(now, progress.waypoint) {
                 progress.waypoint
             } else {
                 held += 1;

@@ -1,0 +1,641 @@
+//! The `moving` command (issue 27): people walking through a scenario while the agent drives
+//! its first leg, under three treatments of the same walkers, and what came of it.
+//!
+//! Scenes (`--kinds`):
+//! - `crossing`: five people pace to and fro across the agent's route at 0.5-1.5 m/s, each
+//!   over the free width there (a corridor's, at most 6 m either side), timed to be near
+//!   their crossing when the agent passes;
+//! - `head-on`: two people walk the route backwards at 1.0-1.5 m/s, from 15-25 m and 35-45 m
+//!   ahead of the start, towards the agent, turning at its corners.
+//!
+//! Treatments (the planner, the agent and the walkers are the same; only the reports differ):
+//! - `static`: the walkers re-submitted every call as still circles, nothing stated about
+//!   motion ([`bi_am_rrt::Motion::NONE`]): the paper's planner with today's interface;
+//! - `predicted`: their velocity as a tracker reports it, trusted for ever (a walker turns
+//!   without notice), with the motion stated ([`motion`]);
+//! - `oracle`: the same, each prediction trusted exactly until the walker's next turn (it knows
+//!   when its prediction ends; past it the disc grows at the stated top speed).
+//!
+//! The agent drives at 1 m/s, one period (0.1 s) per call; the planner has a fixed virtual
+//! budget per call. Every period is checked in continuous time (10 sub-steps, the closest
+//! approach in each) against every walker: a contact's start is a collision, the agent's
+//! (*moved into*) when it moved in that period and holding would have kept clear of that
+//! walker, else the walker's (*ran into* a waiting agent). Writes `runs.csv`, `summary.md`,
+//! `moving.png`/`.svg` (collisions, waiting time and travelled / optimal per scene and
+//! treatment), and for seed 0 of each scene under `predicted` a picture and, with
+//! `--animate`, a GIF.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow};
+use bi_am_rrt::map::ObstacleId;
+use bi_am_rrt::{Circle, Config, Motion, Moving, Point, Status, Wait};
+use plotters::style::RGBColor;
+use rand_core::{Rng, SeedableRng};
+use rand_xorshift::XorShiftRng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
+use crate::draw::{self, Animation, Painter, Scene};
+use crate::report::{BarPanel, Bars, render};
+use crate::sim::{Prepared, SimPlanner, with_planner};
+use crate::stats::median;
+
+/// The agent's top speed, m/s.
+pub const AGENT_SPEED: f32 = 1.0;
+/// Seconds per `plan` call.
+pub const PERIOD: f32 = 0.1;
+/// The motion the `predicted` and `oracle` treatments state.
+pub const MOTION: Motion = Motion {
+    agent_speed: AGENT_SPEED,
+    period: PERIOD,
+    horizon: 1.5,
+    obstacle_speed: 1.5,
+};
+/// Collision sub-steps per period.
+const SUBSTEPS: u32 = 10;
+
+/// A scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kind {
+    /// People crossing the route.
+    Crossing,
+    /// People walking the route towards the agent.
+    HeadOn,
+}
+
+/// How the walkers are reported.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Treatment {
+    /// Still circles, no motion stated.
+    Static,
+    /// Velocities trusted for ever.
+    Predicted,
+    /// Velocities trusted until the next turn.
+    Oracle,
+}
+
+impl Treatment {
+    /// All three, in the order of the charts.
+    pub const ALL: [Treatment; 3] = [Self::Static, Self::Predicted, Self::Oracle];
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::Static => "static",
+            Self::Predicted => "predicted",
+            Self::Oracle => "oracle",
+        }
+    }
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Crossing => "crossing",
+            Self::HeadOn => "head-on",
+        }
+    }
+}
+
+/// A walker: a polyline walked at constant speed, to and fro or once (then standing).
+#[derive(Clone, Debug)]
+struct Walker {
+    points: Vec<Point>,
+    speed: f32,
+    radius: f32,
+    /// Arc length at time 0.
+    phase: f32,
+    to_and_fro: bool,
+}
+
+impl Walker {
+    fn length(&self) -> f32 {
+        self.points.windows(2).map(|w| w[0].dist(w[1])).sum()
+    }
+
+    /// Position, velocity and the time to the next turn at time `t`.
+    fn at(&self, t: f32) -> (Point, Point, f32) {
+        let len = self.length().max(1e-6);
+        let mut u = self.phase + self.speed * t;
+        let mut dir = 1.0f32;
+        if self.to_and_fro {
+            u = u.rem_euclid(2.0 * len);
+            if u > len {
+                u = 2.0 * len - u;
+                dir = -1.0;
+            }
+        } else if u >= len {
+            return (*self.points.last().unwrap(), Point::ZERO, f32::INFINITY);
+        }
+        let mut s = 0.0;
+        for w in self.points.windows(2) {
+            let l = w[0].dist(w[1]);
+            if u <= s + l || l == 0.0 {
+                let f = if l > 0.0 { (u - s) / l } else { 0.0 };
+                let p = w[0].lerp(w[1], f.clamp(0.0, 1.0));
+                let unit = if l > 0.0 {
+                    (w[1] - w[0]) * (1.0 / l)
+                } else {
+                    Point::ZERO
+                };
+                let vel = unit * (self.speed * dir);
+                let left = if dir > 0.0 { s + l - u } else { u - s };
+                return (p, vel, left / self.speed);
+            }
+            s += l;
+        }
+        (*self.points.last().unwrap(), Point::ZERO, f32::INFINITY)
+    }
+}
+
+/// What one run measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct MovingRow {
+    /// Scene.
+    pub kind: Kind,
+    /// Treatment.
+    pub treatment: Treatment,
+    /// Seed (walkers and planner).
+    pub seed: u64,
+    /// The agent stood on the goal.
+    pub reached: bool,
+    /// Seconds until it did (or the run was abandoned).
+    pub time_s: f64,
+    /// Seconds it held before arriving.
+    pub waiting_s: f64,
+    /// Contacts the agent moved into.
+    pub moved_into: u32,
+    /// Contacts a walker made with a waiting agent.
+    pub ran_into: u32,
+    /// Calls with status `Evading`.
+    pub evading_calls: u32,
+    /// Calls with `Wait::Cornered`.
+    pub cornered_calls: u32,
+    /// Metres driven over the leg's exact optimum.
+    pub travelled_ratio: f64,
+    /// Most work units of one call.
+    pub max_work: u64,
+}
+
+/// Arguments of `moving`.
+pub struct MovingArgs {
+    /// Scenes to run.
+    pub kinds: Vec<Kind>,
+    /// Seeds per scene and treatment.
+    pub seeds: u64,
+    /// Planning budget per call on the virtual clock.
+    pub t_exp: Duration,
+    /// Output directory.
+    pub out: PathBuf,
+    /// GIF of seed 0 (`predicted`), one frame every N calls.
+    pub animate: Option<u32>,
+}
+
+/// The route: the planner's path to goal 1 after it has had time to settle (no walkers).
+fn route(prep: &Prepared, cfg: Config) -> Result<Vec<Point>> {
+    let goal = *prep.scenario.goals.first().context("no goal")?;
+    let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
+    with_planner(prep, cfg, 0, |p| {
+        p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
+        for _ in 0..400 {
+            p.grow(&clock);
+        }
+        let mut buf = vec![Point::ZERO; p.tree().len().max(2)];
+        let info = p.path(&mut buf).map_err(|e| anyhow!("{e}"))?;
+        if !info.to_goal {
+            return Err(anyhow!("no path to goal 1 after 400 calls"));
+        }
+        buf.truncate(info.len);
+        Ok(buf)
+    })
+}
+
+/// The point at arc length `s` along `route`, and the direction there.
+fn along(route: &[Point], s: f32) -> (Point, Point) {
+    let mut acc = 0.0;
+    for w in route.windows(2) {
+        let l = w[0].dist(w[1]);
+        if acc + l >= s && l > 0.0 {
+            let d = (w[1] - w[0]) * (1.0 / l);
+            return (w[0].lerp(w[1], (s - acc) / l), d);
+        }
+        acc += l;
+    }
+    let n = route.len();
+    let d = if n >= 2 {
+        let l = route[n - 2].dist(route[n - 1]).max(1e-6);
+        (route[n - 1] - route[n - 2]) * (1.0 / l)
+    } else {
+        Point::new(1.0, 0.0)
+    };
+    (route[n - 1], d)
+}
+
+fn unit(rng: &mut XorShiftRng) -> f32 {
+    (rng.next_u32() >> 8) as f32 / 16_777_216.0
+}
+
+/// The walkers of one run.
+fn walkers(prep: &Prepared, route: &[Point], kind: Kind, seed: u64) -> Vec<Walker> {
+    let mut rng = XorShiftRng::seed_from_u64(seed.wrapping_mul(0x9e37_79b9) ^ 0x5eed);
+    let total: f32 = route.windows(2).map(|w| w[0].dist(w[1])).sum();
+    let grid = prep.scenario.map.grid();
+    let mut out = Vec::new();
+    match kind {
+        Kind::Crossing => {
+            for i in 0..5 {
+                // Crossings spread along the route, away from its ends.
+                let s = total * (0.15 + 0.7 * (i as f32 + unit(&mut rng)) / 5.0);
+                let (x, d) = along(route, s);
+                let n = Point::new(-d.y, d.x);
+                // The free width either side, at most 6 m.
+                let reach = |sign: f32| {
+                    let mut r = 0.0f32;
+                    while r < 6.0 {
+                        let q = x + n * (sign * (r + 0.1));
+                        if !grid.point_free(q) {
+                            break;
+                        }
+                        r += 0.1;
+                    }
+                    r
+                };
+                let (a, b) = (reach(-1.0), reach(1.0));
+                if a + b < 1.0 {
+                    continue;
+                }
+                let speed = 0.5 + unit(&mut rng);
+                let radius = 0.3 + 0.2 * unit(&mut rng);
+                let (p0, p1) = (
+                    x + n * (-(a - radius).max(0.0)),
+                    x + n * (b - radius).max(0.0),
+                );
+                let width = p0.dist(p1);
+                // Near the crossing when the agent gets there (at its top speed), give or
+                // take a few seconds.
+                let arrive = s / AGENT_SPEED + (unit(&mut rng) - 0.5) * 6.0;
+                let phase = (p0.dist(x) - speed * arrive).rem_euclid(2.0 * width.max(1e-3));
+                out.push(Walker {
+                    points: vec![p0, p1],
+                    speed,
+                    radius,
+                    phase,
+                    to_and_fro: true,
+                });
+            }
+        }
+        Kind::HeadOn => {
+            for base in [15.0f32, 35.0] {
+                let s0 = (base + 10.0 * unit(&mut rng)).min(total * 0.9);
+                // The route from s0 back to the start.
+                let mut pts = vec![along(route, s0).0];
+                let mut acc = 0.0;
+                let mut back: Vec<Point> = Vec::new();
+                for w in route.windows(2) {
+                    acc += w[0].dist(w[1]);
+                    if acc < s0 {
+                        back.push(w[1]);
+                    }
+                }
+                back.reverse();
+                pts.extend(back);
+                pts.push(route[0]);
+                out.push(Walker {
+                    points: pts,
+                    speed: 1.0 + 0.5 * unit(&mut rng),
+                    radius: 0.3 + 0.2 * unit(&mut rng),
+                    phase: 0.0,
+                    to_and_fro: false,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// What a treatment submits for a walker at time `t`.
+fn report(w: &Walker, t: f32, treatment: Treatment) -> Moving {
+    let (pos, vel, turn) = w.at(t);
+    let c = Circle::new(pos, w.radius);
+    match treatment {
+        Treatment::Static => Moving::still(c),
+        Treatment::Predicted => Moving::new(c, vel),
+        Treatment::Oracle => Moving::new(c, vel).trusted_for(turn),
+    }
+}
+
+/// Whether the point moving `a0 -> a1` comes within `r` of the one moving `o0 -> o1`.
+fn contact(a0: Point, a1: Point, o0: Point, o1: Point, r: f32) -> bool {
+    let m = r - 1e-4;
+    bi_am_rrt::geometry::segment_point_dist_sq(a0 - o0, a1 - o1, Point::ZERO) < m * m
+}
+
+/// A snapshot for a picture.
+fn scene(p: &SimPlanner<'_, '_>, prep: &Prepared, trail: &[Point], title: String) -> Scene {
+    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
+    let n = p.path(&mut path).map_or(0, |i| i.len);
+    path.truncate(n);
+    Scene {
+        title,
+        forward: draw::edges(p.tree()),
+        reverse: Vec::new(),
+        path,
+        trail: trail.to_vec(),
+        circles: p.map().obstacles().iter().map(|(_, c)| c).collect(),
+        start: prep.scenario.start,
+        goals: prep.scenario.goals.clone(),
+        active: Some(0),
+        agent: trail.last().copied(),
+        meet: None,
+    }
+}
+
+/// One run.
+#[allow(clippy::too_many_arguments)]
+fn one(
+    prep: &Prepared,
+    base: Config,
+    route: &[Point],
+    kind: Kind,
+    treatment: Treatment,
+    seed: u64,
+    t_exp: Duration,
+    pictures: Option<(&Path, Option<u32>)>,
+) -> Result<MovingRow> {
+    let goal = prep.scenario.goals[0];
+    let optimum = prep.optima().first().copied().flatten().unwrap_or(f64::NAN);
+    let mut cfg = base;
+    cfg.budget.t_exp = t_exp;
+    cfg.motion = if treatment == Treatment::Static {
+        Motion::NONE
+    } else {
+        MOTION
+    };
+    let mut people = walkers(prep, route, kind, seed);
+    let total: f32 = route.windows(2).map(|w| w[0].dist(w[1])).sum();
+    let max_calls = ((total / AGENT_SPEED / PERIOD) * 4.0) as u32 + 1200;
+    let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
+    with_planner(prep, cfg, seed, |p| {
+        let ids: Vec<ObstacleId> = people
+            .iter()
+            .map(|w| p.add_moving_obstacle(report(w, 0.0, treatment)))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| anyhow!("{e}"))?;
+        p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
+        let mut agent = prep.scenario.start;
+        let mut trail = vec![agent];
+        let mut contacts = vec![false; people.len()];
+        let painter = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 900));
+        let mut gif = match (pictures, painter.as_ref()) {
+            (Some((dir, Some(_))), Some(painter)) => Some(Animation::new(
+                painter,
+                &dir.join(format!("{}.gif", kind.name())),
+                80,
+            )?),
+            _ => None,
+        };
+        let title = |call: u32| {
+            format!(
+                "{} {}, {} walkers, seed {seed}, t = {:.1} s",
+                prep.scenario.name,
+                kind.name(),
+                treatment.name(),
+                call as f32 * PERIOD
+            )
+        };
+        let mut row = MovingRow {
+            kind,
+            treatment,
+            seed,
+            reached: false,
+            time_s: 0.0,
+            waiting_s: 0.0,
+            moved_into: 0,
+            ran_into: 0,
+            evading_calls: 0,
+            cornered_calls: 0,
+            travelled_ratio: f64::NAN,
+            max_work: 0,
+        };
+        let mut travelled = 0.0f64;
+        for call in 0..max_calls {
+            let t = call as f32 * PERIOD;
+            for (w, &id) in people.iter().zip(&ids) {
+                p.update_obstacle(id, report(w, t, treatment))
+                    .map_err(|e| anyhow!("{e}"))?;
+            }
+            let pr = p.plan(&clock, agent).map_err(|e| anyhow!("{e}"))?;
+            row.max_work = row.max_work.max(pr.work);
+            match pr.status {
+                Status::Arrived => {
+                    row.reached = true;
+                    break;
+                }
+                Status::Evading => row.evading_calls += 1,
+                Status::Waiting(Wait::Cornered) => row.cornered_calls += 1,
+                _ => {}
+            }
+            let next = agent.step_towards(pr.waypoint, AGENT_SPEED * PERIOD);
+            let moved = next != agent;
+            if !moved {
+                row.waiting_s += PERIOD as f64;
+            }
+            let d = agent.dist(next);
+            let at = |f: f32| {
+                let along = (f * AGENT_SPEED * PERIOD).min(d);
+                if d > 0.0 {
+                    agent.lerp(next, along / d)
+                } else {
+                    agent
+                }
+            };
+            for (w, touching) in people.iter_mut().zip(contacts.iter_mut()) {
+                let (mut hit, mut hit_holding) = (false, false);
+                for s in 0..SUBSTEPS {
+                    let (f0, f1) = (s as f32 / SUBSTEPS as f32, (s + 1) as f32 / SUBSTEPS as f32);
+                    let o0 = w.at(t + f0 * PERIOD).0;
+                    let o1 = w.at(t + f1 * PERIOD).0;
+                    hit |= contact(at(f0), at(f1), o0, o1, w.radius);
+                    hit_holding |= contact(agent, agent, o0, o1, w.radius);
+                }
+                if hit && !*touching {
+                    if moved && !hit_holding {
+                        row.moved_into += 1;
+                    } else {
+                        row.ran_into += 1;
+                    }
+                }
+                *touching = hit;
+            }
+            travelled += d as f64;
+            agent = next;
+            trail.push(agent);
+            if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
+                && call % every == 0
+            {
+                g.frame(&scene(p, prep, &trail, title(call)))?;
+            }
+            row.time_s = (call + 1) as f64 * PERIOD as f64;
+        }
+        row.travelled_ratio = travelled / optimum;
+        if let (Some((dir, _)), Some(painter)) = (pictures, painter.as_ref()) {
+            let s = scene(p, prep, &trail, title((row.time_s / PERIOD as f64) as u32));
+            painter.png(&s, &dir.join(format!("{}.png", kind.name())))?;
+        }
+        people.clear();
+        Ok(row)
+    })
+}
+
+/// Runs `moving` on `prep` with the tuned planner.
+pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}", args.out.display()))?;
+    let base = Config::default();
+    let route = route(prep, base)?;
+    let mut jobs = Vec::new();
+    for &kind in &args.kinds {
+        for treatment in Treatment::ALL {
+            for seed in 0..args.seeds {
+                jobs.push((kind, treatment, seed));
+            }
+        }
+    }
+    let bar = indicatif::ProgressBar::new(jobs.len() as u64);
+    let rows: Vec<MovingRow> = jobs
+        .par_iter()
+        .map(|&(kind, treatment, seed)| {
+            let pictures = (seed == 0 && treatment == Treatment::Predicted)
+                .then_some((args.out.as_path(), args.animate));
+            let r = one(
+                prep, base, &route, kind, treatment, seed, args.t_exp, pictures,
+            );
+            bar.inc(1);
+            r
+        })
+        .collect::<Result<_>>()?;
+    bar.finish_and_clear();
+    let mut w = csv::Writer::from_path(args.out.join("runs.csv"))?;
+    for r in &rows {
+        w.serialize(r)?;
+    }
+    w.flush()?;
+    let summary = summarise(&prep.scenario.name, &rows, args);
+    std::fs::write(args.out.join("summary.md"), &summary)?;
+    chart(&rows, &args.kinds, &args.out.join("moving"))?;
+    print!("{summary}");
+    Ok(rows)
+}
+
+/// Per scene and treatment: runs, arrivals, collisions by kind, waiting, travelled / optimal.
+fn summarise(map: &str, rows: &[MovingRow], args: &MovingArgs) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Moving obstacles on {map}: {} seeds per scene and treatment, {} ms (virtual) per call\n",
+        args.seeds,
+        args.t_exp.as_secs_f64() * 1e3
+    );
+    let _ = writeln!(
+        s,
+        "| scene | treatment | runs | reached | collisions: moved into | ran into | runs with a collision | waiting s (median) | time s (median) | travelled / optimal (median) | evading calls | cornered calls | most work per call |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for &kind in &args.kinds {
+        for treatment in Treatment::ALL {
+            let mine: Vec<&MovingRow> = rows
+                .iter()
+                .filter(|r| r.kind == kind && r.treatment == treatment)
+                .collect();
+            let med = |f: &dyn Fn(&MovingRow) -> f64| {
+                let mut v: Vec<f64> = mine.iter().map(|r| f(r)).collect();
+                median(&mut v).map_or("-".into(), |m| format!("{m:.3}"))
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                kind.name(),
+                treatment.name(),
+                mine.len(),
+                mine.iter().filter(|r| r.reached).count(),
+                mine.iter().map(|r| r.moved_into).sum::<u32>(),
+                mine.iter().map(|r| r.ran_into).sum::<u32>(),
+                mine.iter()
+                    .filter(|r| r.moved_into + r.ran_into > 0)
+                    .count(),
+                med(&|r| r.waiting_s),
+                med(&|r| r.time_s),
+                med(&|r| r.travelled_ratio),
+                mine.iter().map(|r| r.evading_calls).sum::<u32>(),
+                mine.iter().map(|r| r.cornered_calls).sum::<u32>(),
+                mine.iter().map(|r| r.max_work).max().unwrap_or(0),
+            );
+        }
+    }
+    s
+}
+
+/// Collisions, waiting time and travelled / optimal per scene, one bar per treatment.
+fn chart(rows: &[MovingRow], kinds: &[Kind], stem: &Path) -> Result<()> {
+    let colours = [
+        RGBColor(150, 150, 150),
+        RGBColor(40, 110, 200),
+        RGBColor(230, 140, 20),
+    ];
+    let series: Vec<(RGBColor, String)> = Treatment::ALL
+        .iter()
+        .zip(colours)
+        .map(|(t, c)| (c, t.name().to_string()))
+        .collect();
+    let groups: Vec<String> = kinds.iter().map(|k| k.name().to_string()).collect();
+    let panel = |title: &str, y: &str, f: &dyn Fn(&[&MovingRow]) -> Option<f64>| BarPanel {
+        title: title.into(),
+        y_label: y.into(),
+        log: false,
+        groups: groups.clone(),
+        series: series.clone(),
+        reference: None,
+        values: kinds
+            .iter()
+            .map(|&k| {
+                Treatment::ALL
+                    .iter()
+                    .map(|&t| {
+                        let mine: Vec<&MovingRow> = rows
+                            .iter()
+                            .filter(|r| r.kind == k && r.treatment == t)
+                            .collect();
+                        f(&mine)
+                    })
+                    .collect()
+            })
+            .collect(),
+        notes: vec![None; kinds.len()],
+    };
+    let med = |mine: &[&MovingRow], f: fn(&MovingRow) -> f64| {
+        let mut v: Vec<f64> = mine
+            .iter()
+            .map(|r| f(r))
+            .filter(|v| v.is_finite())
+            .collect();
+        median(&mut v)
+    };
+    let bars = Bars {
+        title: "Moving obstacles: static, predicted, oracle".into(),
+        cols: 3,
+        panels: vec![
+            panel("Collisions (all runs)", "contacts", &|m| {
+                Some(m.iter().map(|r| (r.moved_into + r.ran_into) as f64).sum())
+            }),
+            panel("Waiting time (median)", "s", &|m| med(m, |r| r.waiting_s)),
+            panel("Travelled / optimal (median)", "ratio", &|m| {
+                med(m, |r| r.travelled_ratio)
+            }),
+        ],
+    };
+    render(&bars, stem)
+}
