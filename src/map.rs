@@ -403,16 +403,11 @@ impl Moving {
         let c = self.circle.center;
         let trusted = window.min(self.trusted_for).max(0.0);
         let beyond = (window - self.trusted_for).max(0.0);
-        let to = if self.velocity == Point::ZERO || trusted == 0.0 {
-            c
-        } else {
-            Point::new(
-                c.x + self.velocity.x * trusted,
-                c.y + self.velocity.y * trusted,
-            )
-        };
-        let grow = if beyond > 0.0 { bound * beyond } else { 0.0 };
-        (c, to, self.circle.radius + grow)
+        let to = Point::new(
+            c.x + self.velocity.x * trusted,
+            c.y + self.velocity.y * trusted,
+        );
+        (c, to, self.circle.radius + bound * beyond)
     }
 
     /// Whether the closed segment `a-b` meets the capsule swept over `[0, window]`.
@@ -550,6 +545,11 @@ impl<const K: usize> Obstacles<K> {
         self.items.iter().map(|(i, m)| (*i, m.circle))
     }
 
+    /// The obstacles present with their ids and motion, as a slice.
+    pub fn as_slice(&self) -> &[(ObstacleId, Moving)] {
+        &self.items
+    }
+
     /// The obstacles present with their ids and motion, in no particular order.
     pub fn iter_moving(&self) -> impl Iterator<Item = (ObstacleId, Moving)> + '_ {
         self.items.iter().copied()
@@ -582,10 +582,9 @@ impl<const K: usize> Obstacles<K> {
     }
 
     /// Whether any obstacle's sweep over `[0, window]` seconds meets `a-b`.
+    #[inline(never)]
     pub fn blocks_within(&self, a: Point, b: Point, window: f32) -> bool {
-        self.items
-            .iter()
-            .any(|(_, m)| m.sweep_meets(a, b, window, self.bound))
+        !self.items.is_empty() && sweeps_meet(&self.items, a, b, window, self.bound)
     }
 
     /// The tree's test: whether any obstacle's sweep over the edge window contains `p`.
@@ -604,6 +603,20 @@ impl<const K: usize> Obstacles<K> {
     pub fn contains_now(&self, p: Point) -> bool {
         self.items.iter().any(|(_, m)| m.circle.contains(p))
     }
+}
+
+/// Whether any of `items` sweeps `a-b` over `[0, window]` (one copy for every capacity `K`).
+#[inline(never)]
+fn sweeps_meet(
+    items: &[(ObstacleId, Moving)],
+    a: Point,
+    b: Point,
+    window: f32,
+    bound: f32,
+) -> bool {
+    items
+        .iter()
+        .any(|(_, m)| m.sweep_meets(a, b, window, bound))
 }
 
 /// The planner's world: a borrowed static grid and up to `K` dynamic circles.
@@ -663,7 +676,7 @@ impl<'a, const K: usize> Map<'a, K> {
             Err(InputError::NotFinite)
         } else if !self.grid.contains(p) {
             Err(InputError::OutOfBounds)
-        } else if !self.free_now(p, p) {
+        } else if !self.grid.point_free(p) || self.obstacles.contains_now(p) {
             Err(InputError::InObstacle)
         } else {
             Ok(())

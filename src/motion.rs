@@ -41,10 +41,36 @@
 
 use crate::config::Motion;
 use crate::geometry::{Point, segment_point_dist_sq};
-use crate::map::Map;
+use crate::map::{Map, Moving, ObstacleId, OccupancyGrid};
 
 /// Escape points tried round the agent when it can neither go on nor hold.
 pub const ESCAPES: u16 = 16;
+
+/// The escapes' directions: the unit vectors at multiples of 22.5 degrees (a table: no
+/// trigonometry, whose range reduction alone is 2.5 KB of flash).
+const DIRECTIONS: [Point; ESCAPES as usize] = {
+    const C1: f32 = 0.923_879_5; // cos 22.5
+    const C2: f32 = core::f32::consts::FRAC_1_SQRT_2; // cos 45
+    const C3: f32 = 0.382_683_43; // cos 67.5
+    [
+        Point::new(1.0, 0.0),
+        Point::new(C1, C3),
+        Point::new(C2, C2),
+        Point::new(C3, C1),
+        Point::new(0.0, 1.0),
+        Point::new(-C3, C1),
+        Point::new(-C2, C2),
+        Point::new(-C1, C3),
+        Point::new(-1.0, 0.0),
+        Point::new(-C1, -C3),
+        Point::new(-C2, -C2),
+        Point::new(-C3, -C1),
+        Point::new(0.0, -1.0),
+        Point::new(C3, -C1),
+        Point::new(C2, -C2),
+        Point::new(C1, -C3),
+    ]
+};
 
 /// Work units the planner keeps per obstacle for this rule before its deadline (the escapes'
 /// tests: about 50 candidates, three pieces each, plus their grid segments).
@@ -76,13 +102,34 @@ pub enum Choice {
     Cornered,
 }
 
-/// The rule's view of one call: the map and the stated motion.
-struct Rule<'a, 'm, const K: usize> {
-    map: &'a Map<'m, K>,
+/// The rule's view of one call: the grid, the obstacles, their top speed past a prediction
+/// and the stated motion (not generic over the map's capacity: one copy of the code).
+struct Rule<'a, 'g> {
+    grid: &'a OccupancyGrid<'g>,
+    obstacles: &'a [(ObstacleId, Moving)],
+    bound: f32,
     motion: &'a Motion,
 }
 
-impl<const K: usize> Rule<'_, '_, K> {
+impl<'a, 'g> Rule<'a, 'g> {
+    fn of<const K: usize>(map: &'a Map<'g, K>, motion: &'a Motion) -> Self {
+        Self {
+            grid: map.grid(),
+            obstacles: map.obstacles().as_slice(),
+            bound: map.obstacles().sweep().1,
+            motion,
+        }
+    }
+
+    /// The segment is free of the map and of every disc where it is now.
+    fn free_now(&self, a: Point, b: Point) -> bool {
+        self.grid.segment_free(a, b)
+            && !self
+                .obstacles
+                .iter()
+                .any(|(_, m)| m.circle.intersects_segment(a, b))
+    }
+
     /// Seconds to drive `d` metres at the top speed (0 when no speed is stated).
     fn drive(&self, d: f32) -> f32 {
         if self.motion.agent_speed > 0.0 {
@@ -106,7 +153,7 @@ impl<const K: usize> Rule<'_, '_, K> {
             q
         };
         let grow = m.obstacle_speed * m.period;
-        !self.map.obstacles().iter().any(|(_, c)| {
+        !self.obstacles.iter().any(|&(_, Moving { circle: c, .. })| {
             let r = c.radius + grow;
             segment_point_dist_sq(a, prefix, c.center) <= r * r
                 && !(d > 0.0 && diff(q, a).dot(diff(a, c.center)) >= d * grow && !c.contains(a))
@@ -116,18 +163,19 @@ impl<const K: usize> Rule<'_, '_, K> {
     /// Whether `a-q` is clear with `extra` seconds kept clear after the drive: rules 1-3 of
     /// the module docs (the full rule is `extra = period + horizon`).
     fn clear(&self, a: Point, q: Point, extra: f32) -> bool {
-        self.map.grid().segment_free(a, q)
+        let window = self.drive(a.dist(q)) + extra;
+        self.grid.segment_free(a, q)
             && !self
-                .map
-                .obstacles()
-                .blocks_within(a, q, self.drive(a.dist(q)) + extra)
+                .obstacles
+                .iter()
+                .any(|(_, m)| m.sweep_meets(a, q, window, self.bound))
             && self.first_period(a, q)
     }
 
     /// Rules 1 and 3 for a candidate escape
     /// (and the segment free of every disc where it is now, as every waypoint is).
     fn passable(&self, a: Point, q: Point) -> bool {
-        self.map.free_now(a, q) && self.first_period(a, q)
+        self.free_now(a, q) && self.first_period(a, q)
     }
 
     /// Evasion's test: like [`Rule::clear`], but against where each obstacle is when the
@@ -145,9 +193,9 @@ impl<const K: usize> Rule<'_, '_, K> {
                 q
             }
         };
-        let bound = self.map.obstacles().sweep().1;
+        let bound = self.bound;
         let mut first = end;
-        for (_, o) in self.map.obstacles().iter_moving() {
+        for (_, o) in self.obstacles {
             let h = o.trusted_for;
             let place = |t: f32| {
                 let k = t.min(h);
@@ -192,12 +240,18 @@ pub fn choose<const K: usize>(
     agent: Point,
     planned: Point,
 ) -> Choice {
-    let rule = Rule { map, motion };
+    decide(&Rule::of(map, motion), agent, planned)
+}
+
+/// [`choose`] on the rule's view.
+#[inline(never)]
+fn decide(rule: &Rule<'_, '_>, agent: Point, planned: Point) -> Choice {
+    let motion = rule.motion;
     let full = motion.period + motion.horizon;
     if rule.clear(agent, planned, full) {
         return Choice::Planned;
     }
-    if planned != agent && map.free_now(agent, planned) {
+    if planned != agent && rule.free_now(agent, planned) {
         // Bisection on the fraction of the way: `lo` clear, `hi` not.
         let (mut lo, mut hi) = (0.0f32, 1.0f32);
         for _ in 0..BISECTIONS {
@@ -209,8 +263,9 @@ pub fn choose<const K: usize>(
             }
         }
         let q = agent.lerp(planned, lo);
-        let cell = map.grid().cell_size();
-        if lo > 0.0 && q.dist_sq(agent) > 1e-4 * cell * cell && rule.clear(agent, q, full) {
+        let cell = rule.grid.cell_size();
+        // `lo` > 0 was tested clear in the loop.
+        if lo > 0.0 && q.dist_sq(agent) > 1e-4 * cell * cell {
             return Choice::Shortened(q);
         }
     }
@@ -222,22 +277,21 @@ pub fn choose<const K: usize>(
     // waypoint.
     let step = motion.agent_speed * motion.period;
     let mut best: Option<(f32, f32, Point)> = None;
-    for i in 0..=ESCAPES {
-        let reaches = if i == 0 || step <= 0.0 {
+    // The agent's own position first, then the escapes.
+    let spots = core::iter::once(None).chain(DIRECTIONS.iter().map(Some));
+    for dir in spots {
+        let reaches = if dir.is_none() || step <= 0.0 {
             1
         } else {
             REACHES.len()
         };
         for &k in REACHES.iter().take(reaches) {
-            let q = if i == 0 || step <= 0.0 {
-                agent
-            } else {
-                let angle = f32::from(i) * (core::f32::consts::TAU / f32::from(ESCAPES));
-                let r = step * k;
-                Point::new(
-                    agent.x + libm::cosf(angle) * r,
-                    agent.y + libm::sinf(angle) * r,
-                )
+            let q = match dir {
+                Some(u) if step > 0.0 => {
+                    let r = step * k;
+                    Point::new(agent.x + u.x * r, agent.y + u.y * r)
+                }
+                _ => agent,
             };
             if !rule.passable(agent, q) {
                 continue;
@@ -353,10 +407,7 @@ mod tests {
             Choice::Evade(q) => {
                 // Aside: off the walker's line by more than its radius once there.
                 assert!((q.y - 5.0).abs() > 0.4, "{q:?}");
-                let rule = Rule {
-                    map: &map,
-                    motion: &m,
-                };
+                let rule = Rule::of(&map, &m);
                 let drive = rule.drive(a.dist(q));
                 assert!(rule.first_contact(a, q, drive + 1.0) > drive, "{q:?}");
                 assert!(map.free_now(a, q));
@@ -374,10 +425,7 @@ mod tests {
         let c = Point::new(5.6, 5.0);
         map.obstacles_mut().add(Circle::new(c, 0.5)).unwrap();
         let a = Point::new(5.0, 5.0);
-        let rule = Rule {
-            map: &map,
-            motion: &m,
-        };
+        let rule = Rule::of(&map, &m);
         assert!(!rule.first_period(a, a), "holding is within its reach");
         assert!(rule.first_period(a, Point::new(4.0, 5.0)), "straight away");
         assert!(

@@ -459,33 +459,32 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     fn reflag(&mut self) {
+        self.reflag_trees(true);
+    }
+
+    /// Re-flags every edge of both trees against the obstacles; the rewiring sweeps restart
+    /// (where a flag changed, or everywhere with `restart`).
+    fn reflag_trees(&mut self, restart: bool) {
         self.stale = false;
         let obstacles = self.map.obstacles();
         for store in [&mut *self.fwd, &mut *self.rev] {
-            store
+            let changed = store
                 .tree
                 .reflag_edges(|a, b| obstacles.blocks_segment(a, b));
-            store.restart_sweeps();
+            if changed || restart {
+                store.restart_sweeps();
+            }
         }
     }
 
     /// Applies the obstacle updates submitted since the last call: the edges are re-flagged,
     /// and the rewiring sweeps restart only where a flag changed.
     fn apply_updates<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>) {
-        if !self.stale {
-            return;
-        }
-        self.stale = false;
-        let obstacles = self.map.obstacles();
-        let k = obstacles.len();
-        for store in [&mut *self.fwd, &mut *self.rev] {
-            meter.charge(units(store.tree.len().saturating_mul(k.saturating_add(1))));
-            if store
-                .tree
-                .reflag_edges(|a, b| obstacles.blocks_segment(a, b))
-            {
-                store.restart_sweeps();
-            }
+        if self.stale {
+            let k = self.map.obstacles().len().saturating_add(1);
+            let nodes = self.fwd.tree.len().saturating_add(self.rev.tree.len());
+            meter.charge(units(nodes.saturating_mul(k)));
+            self.reflag_trees(false);
         }
     }
 
@@ -579,7 +578,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// connect or shortcut segment at most `2 + (width + height) / cell`), in the tuned
     /// profile up to 64 rewires around the new node, and with `path_shortcuts` that many
     /// rewires on the path; a rewiring visit tests at
-    /// most 64 neighbours, each rewire charging the subtree it moves (at most N). Measured
+    /// most 64 neighbours, each rewire charging the subtree it moves (at most N). With
+    /// obstacle updates submitted since the last call, the call starts by re-flagging both
+    /// trees (`2 N (K + 1)` units, before the expansions: it spends the budget), and with
+    /// obstacles present the waypoint rule (module [`crate::motion`]) ends the call with at
+    /// most about 65 tests of the `K` obstacles and as many grid segments, for which the
+    /// expansions leave [`crate::motion::RULE_UNITS`] units per obstacle. Measured
     /// (`host-sim frozen`, Bi-AM-RRT*(D) on the reference maps, N = 8192): calls ended within
     /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about
     /// 200 instructions on a Cortex-M4F.
@@ -682,7 +686,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         };
         // The waypoint rule's tests of moving obstacles run after the loop (module `motion`).
         let obstacles = self.map.obstacles().len() as u64;
-        let steps = if obstacles > 0 && self.cfg.motion != crate::config::Motion::NONE {
+        let steps = if obstacles > 0 && self.cfg.motion.period + self.cfg.motion.horizon > 0.0 {
             meter.reserving(obstacles.saturating_mul(crate::motion::RULE_UNITS), steps)
         } else {
             steps
@@ -734,14 +738,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             Choice::Shortened(q) | Choice::Evade(q) => q,
             Choice::Hold | Choice::Cornered => at,
         };
-        let blocked_now = agent.is_some_and(|a| a != root && !self.map.free_now(a, root));
         let status = match self.goal {
             None => Status::NoGoal,
             Some(_) if trapped => Status::Waiting(Wait::AgentInObstacle),
             Some(_) if arrived => Status::Arrived,
             Some(_) if matches!(choice, Choice::Cornered) => Status::Waiting(Wait::Cornered),
             Some(_) if matches!(choice, Choice::Evade(_)) => Status::Evading,
-            Some(_) if matches!(choice, Choice::Hold) && blocked_now => {
+            Some(_)
+                if matches!(choice, Choice::Hold)
+                    && agent.is_some_and(|a| a != root && !self.map.free_now(a, root)) =>
+            {
                 Status::Waiting(Wait::AgentBlocked)
             }
             Some(_) if matches!(choice, Choice::Hold) && agent != Some(root) => {

@@ -5,7 +5,7 @@
 //! checksum. The including crate provides `scenario` (the `host-sim export` statics) and
 //! `hprintln!` at its root. Also built for RISC-V (`tests/riscv-twin`'s `office`).
 //!
-//! With `BIAMRRT_WALKERS=n` at build time (1-8), `n` people pace to and fro at 1 m/s across
+//! With `BIAMRRT_WALKERS=n` at build time (1-4), `n` people pace to and fro at 1 m/s across
 //! the straight line from the start to goal 1 (6 m either side, evenly along it); before every
 //! call their positions and velocities are submitted (`update_obstacle`) under a stated motion
 //! (issue 27: the cost of moving obstacles on the chip). One protocol call is 0.5 s of the
@@ -31,11 +31,21 @@ const MAX_CALLS: u32 = 600;
 /// Seconds of the world per protocol call with walkers.
 const WORLD_PERIOD: f32 = 0.5;
 
-/// Walkers (`BIAMRRT_WALKERS`, 0-8).
-fn walker_count() -> usize {
-    option_env!("BIAMRRT_WALKERS")
-        .and_then(|v| v.parse::<usize>().ok())
-        .map_or(0, |n| n.min(8))
+/// Walkers (`BIAMRRT_WALKERS` at build time, 0-4): a constant, so that without them none of
+/// their code is built (the flash budget is tight).
+const WALKERS: usize = walkers_from(option_env!("BIAMRRT_WALKERS"));
+
+/// The decimal digits of `v`, at most 4.
+const fn walkers_from(v: Option<&str>) -> usize {
+    let Some(v) = v else { return 0 };
+    let (b, mut i, mut n) = (v.as_bytes(), 0, 0usize);
+    while i < b.len() {
+        if b[i].is_ascii_digit() {
+            n = n * 10 + (b[i] - b'0') as usize;
+        }
+        i += 1;
+    }
+    if n > 4 { 4 } else { n }
 }
 
 /// Walker `i` of `n` at world time `t`: pacing at 1 m/s over 12 m across the start-goal line.
@@ -134,7 +144,7 @@ pub fn exported_mission<C: Clock>(
         hprintln!("scenario: bad grid or table in flash");
         return false;
     };
-    let map: Map<'static, 8> = Map::new(grid);
+    let map: Map<'static, 4> = Map::new(grid);
     // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
     // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
     let base = Config::bi_am_rrt(MetricKind::Diffusion);
@@ -144,8 +154,8 @@ pub fn exported_mission<C: Clock>(
         base
     };
     let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
-    let walkers = walker_count();
-    if walkers > 0 {
+    let walkers = WALKERS;
+    if WALKERS > 0 {
         cfg.motion = Motion {
             agent_speed: 0.7 / WORLD_PERIOD,
             period: WORLD_PERIOD,
@@ -162,7 +172,7 @@ pub fn exported_mission<C: Clock>(
     let first_goal = scenario::GOALS
         .first()
         .map_or(start, |&(x, y)| Point::new(x, y));
-    let mut ids = [ObstacleId(0); 8];
+    let mut ids = [ObstacleId(0); 4];
     for (i, id) in ids.iter_mut().enumerate().take(walkers) {
         match planner.add_moving_obstacle(walker(i, walkers, start, first_goal, 0.0)) {
             Ok(got) => *id = got,
@@ -206,10 +216,12 @@ pub fn exported_mission<C: Clock>(
                     .iter()
                     .fold(trail, |h, &b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
                 // The walkers move on and are reported for the next call.
-                world_calls += 1;
-                let t = world_calls as f32 * WORLD_PERIOD;
-                for (i, &id) in ids.iter().enumerate().take(walkers) {
-                    let _ = p.update_obstacle(id, walker(i, walkers, start, first_goal, t));
+                if WALKERS > 0 {
+                    world_calls += 1;
+                    let t = world_calls as f32 * WORLD_PERIOD;
+                    for (i, &id) in ids.iter().enumerate().take(walkers) {
+                        let _ = p.update_obstacle(id, walker(i, walkers, start, first_goal, t));
+                    }
                 }
                 last = clock.now();
             },
@@ -275,7 +287,7 @@ pub fn exported_mission<C: Clock>(
             r.calls
         );
     }
-    if walkers > 0 {
+    if WALKERS > 0 {
         hprintln!(
             "{} walkers at 1 m/s across the way, updated before every call (motion stated)",
             walkers

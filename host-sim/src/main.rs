@@ -117,7 +117,7 @@ enum Command {
         #[arg(long, default_value = "out/moving")]
         out: PathBuf,
         /// Also write an animated GIF of seed 0 (predicted) per scene, a frame every N calls.
-        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "5",
+        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "20",
               value_parser = clap::value_parser!(u32).range(1..))]
         animate: Option<u32>,
     },

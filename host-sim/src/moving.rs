@@ -391,11 +391,13 @@ fn one(
         let mut trail = vec![agent];
         let mut contacts = vec![false; people.len()];
         let painter = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 900));
-        let mut gif = match (pictures, painter.as_ref()) {
-            (Some((dir, Some(_))), Some(painter)) => Some(Animation::new(
-                painter,
+        // The GIF is smaller and shows no tree (the frames then compress well).
+        let small = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 560));
+        let mut gif = match (pictures, small.as_ref()) {
+            (Some((dir, Some(_))), Some(small)) => Some(Animation::new(
+                small,
                 &dir.join(format!("{}.gif", kind.name())),
-                80,
+                100,
             )?),
             _ => None,
         };
@@ -478,7 +480,9 @@ fn one(
             if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
                 && call % every == 0
             {
-                g.frame(&scene(p, prep, &trail, title(call)))?;
+                let mut s = scene(p, prep, &trail, title(call));
+                s.forward.clear();
+                g.frame(&s)?;
             }
             row.time_s = (call + 1) as f64 * PERIOD as f64;
         }
