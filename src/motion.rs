@@ -11,12 +11,13 @@
 //!    its top speed, the wait there until the next call, and the `horizon` it keeps clear
 //!    after that (so it gives way to what is predicted to cross its way soon);
 //! 3. its first `agent_speed * period` metres (where the agent can be before the next call)
-//!    meet no disc grown by `obstacle_speed * period`: wherever an obstacle turns without
-//!    notice, within the stated top speed, the agent does not drive into it before it plans
-//!    again.
+//!    meet no disc grown by `obstacle_speed * period`, or, for an agent already within such a
+//!    disc, head away from its centre by at least that growth per metre: wherever an
+//!    obstacle turns without notice, within the stated top speed, the agent's move never
+//!    brings it nearer the obstacle than holding would, before it plans again.
 //!
 //! Clearness is monotone along a segment (a nearer `q` has a shorter segment and a shorter
-//! window, so a smaller sweep to miss), so the farthest clear point of a segment is found by
+//! window, so a smaller sweep to miss; rule 3's heading does not depend on `q`'s distance), so the farthest clear point of a segment is found by
 //! bisection. The choice, made last in every `plan` call ([`choose`]):
 //!
 //! - the planned waypoint (the root) when it is clear;
