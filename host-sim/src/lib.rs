@@ -11,7 +11,8 @@
 //! paths), `clock`, `sim` (a scenario prepared for runs, one run under the protocol), `run`
 //! (one run drawn), `draw` (pictures), `experiment` (the matrix), `results` (results folders:
 //! rows, manifest, summary, merge), `report` (charts and the Markdown report), `stats`,
-//! `bench`, `soak`, `stress`, `bounds` and `growth` (measurements). `main.rs` is the
+//! `bench`, `soak`, `stress`, `bounds` and `growth` (measurements), `moving` (people walking
+//! through a scenario, issue 27). `main.rs` is the
 //! command-line layer.
 //!
 //! The core never knows this crate exists: everything here goes through the core's public API
@@ -37,6 +38,7 @@ pub mod graph;
 pub mod growth;
 pub mod maps;
 pub mod metrics;
+#[cfg(feature = "sim")]
 pub mod moving;
 pub mod optimum;
 #[cfg(feature = "sim")]
