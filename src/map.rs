@@ -550,11 +550,6 @@ impl<const K: usize> Obstacles<K> {
         &self.items
     }
 
-    /// The obstacles present with their ids and motion, in no particular order.
-    pub fn iter_moving(&self) -> impl Iterator<Item = (ObstacleId, Moving)> + '_ {
-        self.items.iter().copied()
-    }
-
     /// Number of obstacles present.
     pub fn len(&self) -> usize {
         self.items.len()
@@ -563,11 +558,6 @@ impl<const K: usize> Obstacles<K> {
     /// Whether no obstacle is present.
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
-    }
-
-    /// Whether some obstacle moves.
-    pub fn any_moving(&self) -> bool {
-        self.items.iter().any(|(_, m)| m.velocity != Point::ZERO)
     }
 
     /// Removes every obstacle.
@@ -594,9 +584,7 @@ impl<const K: usize> Obstacles<K> {
 
     /// Whether any disc, where it is now, meets `a-b`.
     pub fn blocks_now(&self, a: Point, b: Point) -> bool {
-        self.items
-            .iter()
-            .any(|(_, m)| m.circle.intersects_segment(a, b))
+        discs_meet(&self.items, a, b)
     }
 
     /// Whether any disc, where it is now, contains `p`.
@@ -605,9 +593,10 @@ impl<const K: usize> Obstacles<K> {
     }
 }
 
-/// Whether any of `items` sweeps `a-b` over `[0, window]` (one copy for every capacity `K`).
+/// Whether any of `items` sweeps `a-b` over `[0, window]` (one copy for every capacity `K`;
+/// also the waypoint rule's, module `motion`).
 #[inline(never)]
-fn sweeps_meet(
+pub(crate) fn sweeps_meet(
     items: &[(ObstacleId, Moving)],
     a: Point,
     b: Point,
@@ -617,6 +606,11 @@ fn sweeps_meet(
     items
         .iter()
         .any(|(_, m)| m.sweep_meets(a, b, window, bound))
+}
+
+/// Whether any of `items`' discs, where they are now, meets `a-b`.
+pub(crate) fn discs_meet(items: &[(ObstacleId, Moving)], a: Point, b: Point) -> bool {
+    items.iter().any(|(_, m)| m.circle.intersects_segment(a, b))
 }
 
 /// The planner's world: a borrowed static grid and up to `K` dynamic circles.

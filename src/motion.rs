@@ -40,9 +40,12 @@
 //! escape's: three pieces of relative motion each) and as many grid segments; the planner
 //! keeps time for it before its deadline ([`RULE_UNITS`] per obstacle).
 
+// Plain `f32` arithmetic on points (no integers): nothing here can overflow or panic.
+#![allow(clippy::arithmetic_side_effects)]
+
 use crate::config::Motion;
 use crate::geometry::{Point, segment_point_dist_sq};
-use crate::map::{Map, Moving, ObstacleId, OccupancyGrid};
+use crate::map::{Map, Moving, ObstacleId, OccupancyGrid, discs_meet, sweeps_meet};
 
 /// Escape points tried round the agent when it can neither go on nor hold.
 pub const ESCAPES: u16 = 16;
@@ -83,11 +86,6 @@ const BISECTIONS: u16 = 12;
 /// Escape distances, in periods of driving at the top speed.
 const REACHES: [f32; 3] = [1.0, 4.0, 10.0];
 
-/// `a - b`, component-wise.
-fn diff(a: Point, b: Point) -> Point {
-    Point::new(a.x - b.x, a.y - b.y)
-}
-
 /// What the waypoint rule chose.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Choice {
@@ -124,11 +122,7 @@ impl<'a, 'g> Rule<'a, 'g> {
 
     /// The segment is free of the map and of every disc where it is now.
     fn free_now(&self, a: Point, b: Point) -> bool {
-        self.grid.segment_free(a, b)
-            && !self
-                .obstacles
-                .iter()
-                .any(|(_, m)| m.circle.intersects_segment(a, b))
+        self.grid.segment_free(a, b) && !discs_meet(self.obstacles, a, b)
     }
 
     /// Seconds to drive `d` metres at the top speed (0 when no speed is stated).
@@ -157,7 +151,7 @@ impl<'a, 'g> Rule<'a, 'g> {
         !self.obstacles.iter().any(|&(_, Moving { circle: c, .. })| {
             let r = c.radius + grow;
             segment_point_dist_sq(a, prefix, c.center) <= r * r
-                && !(d > 0.0 && diff(q, a).dot(diff(a, c.center)) >= d * grow && !c.contains(a))
+                && !(d > 0.0 && (q - a).dot(a - c.center) >= d * grow && !c.contains(a))
         })
     }
 
@@ -166,10 +160,7 @@ impl<'a, 'g> Rule<'a, 'g> {
     fn clear(&self, a: Point, q: Point, extra: f32) -> bool {
         let window = self.drive(a.dist(q)) + extra;
         self.grid.segment_free(a, q)
-            && !self
-                .obstacles
-                .iter()
-                .any(|(_, m)| m.sweep_meets(a, q, window, self.bound))
+            && !sweeps_meet(self.obstacles, a, q, window, self.bound)
             && self.first_period(a, q)
     }
 
@@ -198,11 +189,7 @@ impl<'a, 'g> Rule<'a, 'g> {
         let mut first = end;
         for (_, o) in self.obstacles {
             let h = o.trusted_for;
-            let place = |t: f32| {
-                let k = t.min(h);
-                let c = o.circle.center;
-                Point::new(c.x + o.velocity.x * k, c.y + o.velocity.y * k)
-            };
+            let place = |t: f32| o.circle.center + o.velocity * t.min(h);
             // Pieces end where a motion changes: the end of the drive and of the prediction.
             let (c0, c1) = (t_drive, h.min(end));
             let mut t0 = 0.0f32;
@@ -212,8 +199,8 @@ impl<'a, 'g> Rule<'a, 'g> {
                 }
                 // The radius at the piece's end (it only grows): conservative within it.
                 let r = o.circle.radius + bound * (t1 - h).max(0.0);
-                let p0 = diff(at(t0), place(t0));
-                let d = diff(diff(at(t1), place(t1)), p0);
+                let p0 = at(t0) - place(t0);
+                let d = at(t1) - place(t1) - p0;
                 let (aa, b, c) = (d.dot(d), p0.dot(d), p0.dot(p0) - r * r);
                 let s = if c <= 0.0 {
                     Some(0.0)
@@ -288,10 +275,7 @@ fn decide(rule: &Rule<'_, '_>, agent: Point, planned: Point) -> Choice {
         };
         for &k in REACHES.iter().take(reaches) {
             let q = match dir {
-                Some(u) if step > 0.0 => {
-                    let r = step * k;
-                    Point::new(agent.x + u.x * r, agent.y + u.y * r)
-                }
+                Some(&u) if step > 0.0 => agent + u * (step * k),
                 _ => agent,
             };
             if !rule.passable(agent, q) {
@@ -418,7 +402,7 @@ mod tests {
     }
 
     #[test]
-    fn within_reach_the_agent_may_only_step_away() {
+    fn regression_within_reach_the_agent_may_step_away() {
         let mut map: Map<'_, 4> = Map::new(open());
         let m = walking();
         map.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);

@@ -378,3 +378,44 @@ fn stress_1000_runs_of_each_kind() {
     as_reported(runs(1000));
     without_notice(runs(1000));
 }
+
+/// The first waypoint rule of module `motion` handed an agent standing inside a disc the root
+/// (found by the operation sequences before it landed): such an agent holds, still or moving
+/// obstacle, motion stated or not.
+#[test]
+fn regression_an_agent_inside_an_obstacle_holds() {
+    let grid = *hall();
+    let start = Point::new(1.5, 7.0);
+    for (motion, velocity) in [
+        (Motion::NONE, Point::ZERO),
+        (motion(), Point::ZERO),
+        (motion(), Point::new(0.0, 1.0)),
+    ] {
+        let mut cfg = Config::default().for_grid(&grid);
+        cfg.motion = motion;
+        cfg.budget.max_expansions = 12;
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let mut p: Planner<'_, '_, _, _, N, B, K> = Planner::new(
+            &mut storage,
+            Map::new(grid),
+            Euclidean,
+            XorShiftRng::seed_from_u64(1),
+            cfg,
+            start,
+        )
+        .unwrap();
+        p.set_goal(Point::new(22.5, 7.0)).unwrap();
+        let clock = FakeClock::nanos().with_work_cost(30).with_step(10);
+        // Let the tree grow and the root move on, then drop a disc on the agent.
+        let mut agent = start;
+        for _ in 0..20 {
+            let pr = p.plan(&clock, agent).unwrap();
+            agent = agent.step_towards(pr.waypoint, SPEED * PERIOD);
+        }
+        let disc = Moving::new(Circle::new(agent, 0.5), velocity);
+        p.add_moving_obstacle(disc).unwrap();
+        let pr = p.plan(&clock, agent).unwrap();
+        assert_eq!(pr.waypoint, agent, "{motion:?} {velocity:?}: {pr:?}");
+        assert_eq!(pr.status, Status::Waiting(Wait::AgentInObstacle), "{pr:?}");
+    }
+}

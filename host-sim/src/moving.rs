@@ -39,9 +39,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
-use crate::draw::{self, Animation, Painter, Scene};
+use crate::draw::{Animation, Painter};
 use crate::report::{BarPanel, Bars, render};
-use crate::sim::{Prepared, SimPlanner, with_planner};
+use crate::run::scene;
+use crate::sim::{Prepared, with_planner};
 use crate::stats::median;
 
 /// The agent's top speed, m/s.
@@ -129,28 +130,42 @@ impl Walker {
                 u = 2.0 * len - u;
                 dir = -1.0;
             }
-        } else if u >= len {
-            return (*self.points.last().unwrap(), Point::ZERO, f32::INFINITY);
         }
-        let mut s = 0.0;
-        for w in self.points.windows(2) {
-            let l = w[0].dist(w[1]);
-            if u <= s + l || l == 0.0 {
-                let f = if l > 0.0 { (u - s) / l } else { 0.0 };
-                let p = w[0].lerp(w[1], f.clamp(0.0, 1.0));
-                let unit = if l > 0.0 {
-                    (w[1] - w[0]) * (1.0 / l)
-                } else {
-                    Point::ZERO
-                };
-                let vel = unit * (self.speed * dir);
-                let left = if dir > 0.0 { s + l - u } else { u - s };
-                return (p, vel, left / self.speed);
+        match locate(&self.points, u) {
+            Some((p, unit, from, to)) if self.to_and_fro || u < len => {
+                let left = if dir > 0.0 { to - u } else { u - from };
+                (p, unit * (self.speed * dir), left / self.speed)
             }
-            s += l;
+            // Past the end of a one-way walk (or no walk at all): standing.
+            _ => (*self.points.last().unwrap(), Point::ZERO, f32::INFINITY),
         }
-        (*self.points.last().unwrap(), Point::ZERO, f32::INFINITY)
     }
+}
+
+/// Where arc length `s` falls on the polyline `points`: the point, the unit direction of its
+/// segment, and the arc lengths at which that segment starts and ends (segments of no length
+/// skipped; past the end, the end of the last segment). `None` without a segment.
+fn locate(points: &[Point], s: f32) -> Option<(Point, Point, f32, f32)> {
+    let mut acc = 0.0;
+    let mut last = None;
+    for w in points.windows(2) {
+        let l = w[0].dist(w[1]);
+        if l == 0.0 {
+            continue;
+        }
+        let unit = (w[1] - w[0]) * (1.0 / l);
+        if s <= acc + l {
+            return Some((
+                w[0].lerp(w[1], ((s - acc) / l).max(0.0)),
+                unit,
+                acc,
+                acc + l,
+            ));
+        }
+        last = Some((w[1], unit, acc, acc + l));
+        acc += l;
+    }
+    last
 }
 
 /// What one run measured.
@@ -217,23 +232,7 @@ fn route(prep: &Prepared, cfg: Config) -> Result<Vec<Point>> {
 
 /// The point at arc length `s` along `route`, and the direction there.
 fn along(route: &[Point], s: f32) -> (Point, Point) {
-    let mut acc = 0.0;
-    for w in route.windows(2) {
-        let l = w[0].dist(w[1]);
-        if acc + l >= s && l > 0.0 {
-            let d = (w[1] - w[0]) * (1.0 / l);
-            return (w[0].lerp(w[1], (s - acc) / l), d);
-        }
-        acc += l;
-    }
-    let n = route.len();
-    let d = if n >= 2 {
-        let l = route[n - 2].dist(route[n - 1]).max(1e-6);
-        (route[n - 1] - route[n - 2]) * (1.0 / l)
-    } else {
-        Point::new(1.0, 0.0)
-    };
-    (route[n - 1], d)
+    locate(route, s).map_or((route[0], Point::new(1.0, 0.0)), |(p, d, _, _)| (p, d))
 }
 
 fn unit(rng: &mut XorShiftRng) -> f32 {
@@ -333,26 +332,6 @@ fn report(w: &Walker, t: f32, treatment: Treatment) -> Moving {
 fn contact(a0: Point, a1: Point, o0: Point, o1: Point, r: f32) -> bool {
     let m = r - 1e-4;
     bi_am_rrt::geometry::segment_point_dist_sq(a0 - o0, a1 - o1, Point::ZERO) < m * m
-}
-
-/// A snapshot for a picture.
-fn scene(p: &SimPlanner<'_, '_>, prep: &Prepared, trail: &[Point], title: String) -> Scene {
-    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
-    let n = p.path(&mut path).map_or(0, |i| i.len);
-    path.truncate(n);
-    Scene {
-        title,
-        forward: draw::edges(p.tree()),
-        reverse: Vec::new(),
-        path,
-        trail: trail.to_vec(),
-        circles: p.map().obstacles().iter().map(|(_, c)| c).collect(),
-        start: prep.scenario.start,
-        goals: prep.scenario.goals.clone(),
-        active: Some(0),
-        agent: trail.last().copied(),
-        meet: None,
-    }
 }
 
 /// One run.
@@ -480,15 +459,23 @@ fn one(
             if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
                 && call % every == 0
             {
-                let mut s = scene(p, prep, &trail, title(call));
+                let mut s = scene(p, &trail, &prep.scenario, 0, title(call));
                 s.forward.clear();
+                s.reverse.clear();
                 g.frame(&s)?;
             }
             row.time_s = (call + 1) as f64 * PERIOD as f64;
         }
         row.travelled_ratio = travelled / optimum;
         if let (Some((dir, _)), Some(painter)) = (pictures, painter.as_ref()) {
-            let s = scene(p, prep, &trail, title((row.time_s / PERIOD as f64) as u32));
+            let mut s = scene(
+                p,
+                &trail,
+                &prep.scenario,
+                0,
+                title((row.time_s / PERIOD as f64) as u32),
+            );
+            s.reverse.clear();
             painter.png(&s, &dir.join(format!("{}.png", kind.name())))?;
         }
         people.clear();

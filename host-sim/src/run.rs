@@ -45,8 +45,8 @@ pub struct RunArgs {
     pub pace: crate::results::Pace,
 }
 
-/// A snapshot of the planner for a picture.
-fn scene(
+/// A snapshot of the planner for a picture (also `moving`'s).
+pub(crate) fn scene(
     p: &SimPlanner<'_, '_>,
     trail: &[Point],
     scenario: &Scenario,
