@@ -36,6 +36,10 @@ error_enum! {
         /// The cell size is not a finite positive number, or its inverse or the map's extent
         /// is not finite.
         BadCellSize => "cell size must be finite and positive, with a finite inverse and extent",
+        /// A live cell edit on a map that has no overlay (`Map::with_overlay`).
+        NoOverlay => "the map has no live overlay to edit",
+        /// A live cell edit names a cell outside the grid.
+        CellOutside => "cell outside the grid",
     }
 }
 

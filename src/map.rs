@@ -36,6 +36,15 @@
 //! ([`Moving`], beyond the paper) blocks, for the tree, the capsule it sweeps over the edge
 //! window ([`Obstacles::set_sweep`]); `free_path` uses that test, [`Map::free_now`] the discs
 //! where they are.
+//!
+//! # Live cells
+//!
+//! Beyond the paper, a map may carry an [`Overlay`] ([`Map::with_overlay`]): a caller-owned
+//! bitmap in the grid's layout whose set bits flip the grid's cells, so that a lidar can mark
+//! cells occupied and clear them at run time ([`Map::set_cells`]) while the grid, and the
+//! diffusion table baked from it, stay in flash untouched. Every test above then reads the live
+//! cells ([`Map::live`]); a map whose overlay flips no cell takes the grid's own test. The
+//! planner re-tests the edges near the changed cells at its next call (module `planner`).
 
 use core::ops::ControlFlow;
 
@@ -192,6 +201,36 @@ impl<'a> OccupancyGrid<'a> {
         .is_continue()
     }
 
+    /// [`Self::point_free`] with the cells of `flip` (same layout) flipped ([`Overlay`]).
+    fn point_free_xor(&self, p: Point, flip: &[u8]) -> bool {
+        const M: f32 = CONTACT_MARGIN;
+        if !self.contains(p) {
+            return false;
+        }
+        let (x, y) = (p.x * self.inv_cell, p.y * self.inv_cell);
+        let (c0, c1) = (axis_index(x - M, self.width), axis_index(x + M, self.width));
+        let (r0, r1) = (
+            axis_index(y - M, self.height),
+            axis_index(y + M, self.height),
+        );
+        (r0..=r1).all(|row| self.span_free_xor(row, c0, c1, flip))
+    }
+
+    /// [`Self::segment_free`] with the cells of `flip` (same layout) flipped ([`Overlay`]).
+    fn segment_free_xor(&self, a: Point, b: Point, flip: &[u8]) -> bool {
+        if !self.contains(a) || !self.contains(b) {
+            return false;
+        }
+        self.for_each_span(a, b, |row, c0, c1| {
+            if self.span_free_xor(row, c0, c1, flip) {
+                ControlFlow::Continue(())
+            } else {
+                ControlFlow::Break(())
+            }
+        })
+        .is_continue()
+    }
+
     /// Calls `f(col, row)` for every grid cell the segment `a-b` touches (within the contact
     /// margin), row by row; stops early when `f` breaks. Ends outside the map are allowed: only
     /// cells of the grid are visited.
@@ -278,6 +317,29 @@ impl<'a> OccupancyGrid<'a> {
             }
             _ => false,
         }
+    }
+
+    /// [`Self::span_free`] over the cells XOR `flip`.
+    fn span_free_xor(&self, row: u16, c0: u16, c1: u16, flip: &[u8]) -> bool {
+        let (i0, i1) = (
+            cell_index(c0, row, self.width),
+            cell_index(c1, row, self.width),
+        );
+        let (b0, b1) = (i0 / 8, i1 / 8);
+        let (Some(base), Some(flip)) = (self.bits.get(b0..=b1), flip.get(b0..=b1)) else {
+            return false;
+        };
+        let last = b1.saturating_sub(b0);
+        base.iter().zip(flip).enumerate().all(|(k, (&g, &f))| {
+            let mut mask = 0xffu8;
+            if k == 0 {
+                mask &= 0xff << (i0 % 8);
+            }
+            if k == last {
+                mask &= 0xff >> ((i1 % 8) ^ 7);
+            }
+            (g ^ f) & mask == 0
+        })
     }
 }
 
@@ -613,10 +675,79 @@ pub(crate) fn discs_meet(items: &[(ObstacleId, Moving)], a: Point, b: Point) -> 
     items.iter().any(|(_, m)| m.circle.intersects_segment(a, b))
 }
 
-/// The planner's world: a borrowed static grid and up to `K` dynamic circles.
-#[derive(Clone, Debug)]
+/// Live cell edits (beyond the paper): a caller-owned bitmap in the grid's layout whose set
+/// bits flip the borrowed grid's cells, so the live map is `grid XOR overlay`. A lidar marks a
+/// free cell occupied or clears an occupied one ([`Map::set_cells`]); the static grid, and the
+/// diffusion table baked from it, stay as they are. Each edit grows the box of cells changed
+/// since the planner last repaired its trees ([`Map::take_changed`]).
+#[derive(Debug)]
+pub struct Overlay<'a> {
+    bits: &'a mut [u8],
+    /// Cells flipped now (set bits), so a live map with none takes the grid's own test.
+    flipped: u32,
+    /// Cells flipped from free to occupied now.
+    marked: u32,
+    /// `[col0, row0, col1, row1]` of the cells changed since the last `take_changed`.
+    changed: Option<[u16; 4]>,
+}
+
+/// The live occupancy the planner tests against: the grid with the overlay's cells flipped
+/// (a copyable view; [`Map::live`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Live<'a> {
+    grid: &'a OccupancyGrid<'a>,
+    /// The overlay's bits while it flips any cell.
+    flip: Option<&'a [u8]>,
+}
+
+impl<'a> Live<'a> {
+    /// The static grid under the edits.
+    pub fn grid(&self) -> &'a OccupancyGrid<'a> {
+        self.grid
+    }
+
+    /// [`OccupancyGrid::segment_free`] on the live cells (one copy of the code: it is called
+    /// from many places, and the firmware's flash is counted).
+    #[inline(never)]
+    pub fn segment_free(&self, a: Point, b: Point) -> bool {
+        match self.flip {
+            None => self.grid.segment_free(a, b),
+            Some(f) => self.grid.segment_free_xor(a, b, f),
+        }
+    }
+
+    /// [`OccupancyGrid::point_free`] on the live cells.
+    #[inline(never)]
+    pub fn point_free(&self, p: Point) -> bool {
+        match self.flip {
+            None => self.grid.point_free(p),
+            Some(f) => self.grid.point_free_xor(p, f),
+        }
+    }
+
+    /// Whether cell `(col, row)` is occupied now (outside the grid: occupied).
+    pub fn is_occupied(&self, col: u16, row: u16) -> bool {
+        let base = self.grid.is_occupied(col, row);
+        let i = cell_index(col, row, self.grid.cols());
+        let flipped = self
+            .flip
+            .and_then(|f| f.get(i / 8))
+            .is_some_and(|b| b & (1 << (i % 8)) != 0);
+        base != (flipped && col < self.grid.cols() && row < self.grid.rows())
+    }
+
+    /// Whether any cell is flipped (a live map that differs from its grid).
+    pub fn edited(&self) -> bool {
+        self.flip.is_some()
+    }
+}
+
+/// The planner's world: a borrowed static grid, optionally a live [`Overlay`] of edited cells,
+/// and up to `K` dynamic circles.
+#[derive(Debug)]
 pub struct Map<'a, const K: usize> {
     grid: OccupancyGrid<'a>,
+    overlay: Option<Overlay<'a>>,
     obstacles: Obstacles<K>,
 }
 
@@ -625,8 +756,106 @@ impl<'a, const K: usize> Map<'a, K> {
     pub const fn new(grid: OccupancyGrid<'a>) -> Self {
         Self {
             grid,
+            overlay: None,
             obstacles: Obstacles::new(),
         }
+    }
+
+    /// This world with live cell edits in `bits`, a caller-owned buffer of at least
+    /// [`OccupancyGrid::bytes_needed`] bytes (the grid's size again: 23 KB for a 604 x 307
+    /// nav2 map), which is cleared: the live map starts as the grid.
+    pub fn with_overlay(mut self, bits: &'a mut [u8]) -> Result<Self, MapError> {
+        let n = OccupancyGrid::bytes_needed(self.grid.cols(), self.grid.rows());
+        let Some(used) = bits.get_mut(..n) else {
+            return Err(MapError::BufferTooShort);
+        };
+        used.fill(0);
+        self.overlay = Some(Overlay {
+            bits: used,
+            flipped: 0,
+            marked: 0,
+            changed: None,
+        });
+        Ok(self)
+    }
+
+    /// The live cells: the grid with the overlay's edits.
+    pub fn live(&self) -> Live<'_> {
+        Live {
+            grid: &self.grid,
+            flip: self
+                .overlay
+                .as_ref()
+                .filter(|o| o.flipped > 0)
+                .map(|o| &*o.bits),
+        }
+    }
+
+    /// Cells the overlay turned from free to occupied, now.
+    pub fn marked_cells(&self) -> u32 {
+        self.overlay.as_ref().map_or(0, |o| o.marked)
+    }
+
+    /// Sets every cell of the rectangle with corners `a` and `b` (`(col, row)`, inclusive, in
+    /// any order) occupied or free in the live map: O(cells). Returns how many cells changed.
+    /// Errors, changing nothing, without an overlay or with a corner outside the grid. The
+    /// planner's own [`crate::Planner::set_cells`] also repairs its trees at the next call.
+    pub fn set_cells(
+        &mut self,
+        a: (u16, u16),
+        b: (u16, u16),
+        occupied: bool,
+    ) -> Result<u32, MapError> {
+        let grid = self.grid;
+        let Some(o) = self.overlay.as_mut() else {
+            return Err(MapError::NoOverlay);
+        };
+        let (w, h) = (grid.cols(), grid.rows());
+        if a.0 >= w || b.0 >= w || a.1 >= h || b.1 >= h {
+            return Err(MapError::CellOutside);
+        }
+        let (c0, c1) = (a.0.min(b.0), a.0.max(b.0));
+        let (r0, r1) = (a.1.min(b.1), a.1.max(b.1));
+        let mut changed = 0u32;
+        for row in r0..=r1 {
+            for col in c0..=c1 {
+                let i = cell_index(col, row, w);
+                let Some(byte) = o.bits.get_mut(i / 8) else {
+                    continue;
+                };
+                let bit = 1u8 << (i % 8);
+                let base = grid.is_occupied(col, row);
+                if (base != (*byte & bit != 0)) == occupied {
+                    continue;
+                }
+                *byte ^= bit;
+                let now_flipped = *byte & bit != 0;
+                o.flipped = if now_flipped {
+                    o.flipped.saturating_add(1)
+                } else {
+                    o.flipped.saturating_sub(1)
+                };
+                if !base {
+                    o.marked = if occupied {
+                        o.marked.saturating_add(1)
+                    } else {
+                        o.marked.saturating_sub(1)
+                    };
+                }
+                changed = changed.saturating_add(1);
+                o.changed = Some(match o.changed {
+                    None => [col, row, col, row],
+                    Some([x0, y0, x1, y1]) => [x0.min(col), y0.min(row), x1.max(col), y1.max(row)],
+                });
+            }
+        }
+        Ok(changed)
+    }
+
+    /// The box `[col0, row0, col1, row1]` of the cells changed since the last call, and forgets
+    /// it (the planner re-tests the edges near it).
+    pub(crate) fn take_changed(&mut self) -> Option<[u16; 4]> {
+        self.overlay.as_mut().and_then(|o| o.changed.take())
     }
 
     /// The static occupancy grid.
@@ -649,28 +878,35 @@ impl<'a, const K: usize> Map<'a, K> {
     /// and meets no dynamic circle (for a moving one: its sweep over the edge window,
     /// [`Obstacles::blocks_segment`]).
     pub fn free_path(&self, a: Point, b: Point) -> bool {
-        self.grid.segment_free(a, b) && !self.obstacles.blocks_segment(a, b)
+        self.live().segment_free(a, b) && !self.obstacles.blocks_segment(a, b)
     }
 
     /// Whether the segment is inside the map, touches no occupied cell and meets no dynamic
     /// disc where it is now (not its sweep: [`Obstacles::blocks_now`]).
     pub fn free_now(&self, a: Point, b: Point) -> bool {
-        self.grid.segment_free(a, b) && !self.obstacles.blocks_now(a, b)
+        self.live().segment_free(a, b) && !self.obstacles.blocks_now(a, b)
     }
 
     /// Whether a single position is free (the degenerate segment `p-p`).
     pub fn free_point(&self, p: Point) -> bool {
-        self.grid.point_free(p) && !self.obstacles.blocks_segment(p, p)
+        self.live().point_free(p) && !self.obstacles.blocks_segment(p, p)
+    }
+
+    /// Whether `p` is in a wall: occupied in the grid and not cleared by the overlay. A cell
+    /// the overlay marked is not a wall (it may clear again, like a person who stands still).
+    pub fn in_wall(&self, p: Point) -> bool {
+        !self.grid.point_free(p) && !self.live().point_free(p)
     }
 
     /// Validates a position given at the API edge: finite, inside the map, not in an obstacle
-    /// (a dynamic one where it is now: a goal on a person's way is still a goal).
+    /// (a dynamic one where it is now, or a marked cell, is not: a goal on a person's way is
+    /// still a goal).
     pub fn check_point(&self, p: Point) -> Result<(), InputError> {
         if !p.is_finite() {
             Err(InputError::NotFinite)
         } else if !self.grid.contains(p) {
             Err(InputError::OutOfBounds)
-        } else if !self.grid.point_free(p) || self.obstacles.contains_now(p) {
+        } else if self.in_wall(p) || self.obstacles.contains_now(p) {
             Err(InputError::InObstacle)
         } else {
             Ok(())

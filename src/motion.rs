@@ -45,7 +45,7 @@
 
 use crate::config::Motion;
 use crate::geometry::{Point, segment_point_dist_sq};
-use crate::map::{Map, Moving, ObstacleId, OccupancyGrid, discs_meet, sweeps_meet};
+use crate::map::{Live, Map, Moving, ObstacleId, discs_meet, sweeps_meet};
 
 /// Escape points tried round the agent when it can neither go on nor hold.
 pub const ESCAPES: u16 = 16;
@@ -103,17 +103,17 @@ pub enum Choice {
 
 /// The rule's view of one call: the grid, the obstacles, their top speed past a prediction
 /// and the stated motion (not generic over the map's capacity: one copy of the code).
-struct Rule<'a, 'g> {
-    grid: &'a OccupancyGrid<'g>,
+struct Rule<'a> {
+    cells: Live<'a>,
     obstacles: &'a [(ObstacleId, Moving)],
     bound: f32,
     motion: &'a Motion,
 }
 
-impl<'a, 'g> Rule<'a, 'g> {
-    fn of<const K: usize>(map: &'a Map<'g, K>, motion: &'a Motion) -> Self {
+impl<'a> Rule<'a> {
+    fn of<const K: usize>(map: &'a Map<'_, K>, motion: &'a Motion) -> Self {
         Self {
-            grid: map.grid(),
+            cells: map.live(),
             obstacles: map.obstacles().as_slice(),
             bound: map.obstacles().sweep().1,
             motion,
@@ -122,7 +122,7 @@ impl<'a, 'g> Rule<'a, 'g> {
 
     /// The segment is free of the map and of every disc where it is now.
     fn free_now(&self, a: Point, b: Point) -> bool {
-        self.grid.segment_free(a, b) && !discs_meet(self.obstacles, a, b)
+        self.cells.segment_free(a, b) && !discs_meet(self.obstacles, a, b)
     }
 
     /// Seconds to drive `d` metres at the top speed (0 when no speed is stated).
@@ -159,7 +159,7 @@ impl<'a, 'g> Rule<'a, 'g> {
     /// the module docs (the full rule is `extra = period + horizon`).
     fn clear(&self, a: Point, q: Point, extra: f32) -> bool {
         let window = self.drive(a.dist(q)) + extra;
-        self.grid.segment_free(a, q)
+        self.cells.segment_free(a, q)
             && !sweeps_meet(self.obstacles, a, q, window, self.bound)
             && self.first_period(a, q)
     }
@@ -233,7 +233,7 @@ pub fn choose<const K: usize>(
 
 /// [`choose`] on the rule's view.
 #[inline(never)]
-fn decide(rule: &Rule<'_, '_>, agent: Point, planned: Point) -> Choice {
+fn decide(rule: &Rule<'_>, agent: Point, planned: Point) -> Choice {
     let motion = rule.motion;
     let full = motion.period + motion.horizon;
     if rule.clear(agent, planned, full) {
@@ -251,7 +251,7 @@ fn decide(rule: &Rule<'_, '_>, agent: Point, planned: Point) -> Choice {
             }
         }
         let q = agent.lerp(planned, lo);
-        let cell = rule.grid.cell_size();
+        let cell = rule.cells.grid().cell_size();
         // `lo` > 0 was tested clear in the loop.
         if lo > 0.0 && q.dist_sq(agent) > 1e-4 * cell * cell {
             return Choice::Shortened(q);

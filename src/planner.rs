@@ -83,7 +83,7 @@ use crate::metric::Metric;
 use crate::motion::{Choice, choose};
 use crate::rewire::Slice;
 use crate::search::{Env, Near, Target, TreeStore};
-use crate::slots::{sort_small_by, units};
+use crate::slots::{sat_u32, sort_small_by, units};
 use crate::tree::{Cost, NodeId, Tree};
 
 /// With a root step (`root_step`, [`Config::rewiring`]), the root waits for the goal to join
@@ -147,10 +147,11 @@ pub enum Status {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Wait {
-    /// Every path the tree holds to the goal crosses a dynamic obstacle; rewiring looks for a
-    /// way around (or the obstacle may leave).
+    /// Every path the tree holds to the goal crosses a dynamic obstacle or a marked cell;
+    /// rewiring looks for a way around (or the obstacle may leave).
     PathBlocked,
-    /// The agent stands inside a dynamic obstacle: any motion would cross it.
+    /// The agent stands inside a dynamic obstacle or a cell the live overlay marked: any
+    /// motion would cross it.
     AgentInObstacle,
     /// A dynamic obstacle lies between the agent and every tree node it could go to.
     AgentBlocked,
@@ -462,6 +463,22 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.reflag_trees(true);
     }
 
+    /// Marks (`occupied`) or clears every cell of the rectangle with corners `a` and `b`
+    /// (`(col, row)`, inclusive) in the live map ([`Map::set_cells`]: the map needs an
+    /// overlay): O(cells) to submit; the next `plan` or `grow` call re-tests the edges of both
+    /// trees near the changed cells (an edge crossing a marked cell is blocked like one
+    /// through a circle, one whose cells cleared reopens) and charges that work. Returns how
+    /// many cells changed. The diffusion table is not rebaked (docs/moving.md says what that
+    /// costs).
+    pub fn set_cells(
+        &mut self,
+        a: (u16, u16),
+        b: (u16, u16),
+        occupied: bool,
+    ) -> Result<u32, crate::error::MapError> {
+        self.map.set_cells(a, b, occupied)
+    }
+
     /// Re-flags every edge of both trees against the obstacles; the rewiring sweeps restart
     /// (where a flag changed, or everywhere with `restart`).
     fn reflag_trees(&mut self, restart: bool) {
@@ -486,6 +503,51 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             meter.charge(units(nodes.saturating_mul(k)));
             self.reflag_trees(false);
         }
+        if let Some(changed) = self.map.take_changed() {
+            self.rewall_trees(changed, meter);
+        }
+    }
+
+    /// Re-tests, against the live cells, every edge of both trees whose cells may include one
+    /// in `changed` (`[col0, row0, col1, row1]`); the rewiring sweeps restart where a flag
+    /// changed. Work: a box test per edge, and the cells of each edge re-tested.
+    fn rewall_trees<C: Clock + ?Sized>(&mut self, changed: [u16; 4], meter: &Meter<'_, C>) {
+        let cells = self.map.live();
+        let grid = cells.grid();
+        let inv = 1.0 / grid.cell_size();
+        // The changed box in metres, grown by a cell for the contact margin.
+        let [c0, r0, c1, r1] = changed.map(f32::from);
+        let (lo, hi) = (
+            Point::new(c0 - 1.0, r0 - 1.0),
+            Point::new(c1 + 2.0, r1 + 2.0),
+        );
+        for store in [&mut *self.fwd, &mut *self.rev] {
+            meter.charge(units(store.tree.len()));
+            let changed = store.tree.rewall_edges(|a, b| {
+                let (p, q) = (
+                    Point::new(a.x * inv, a.y * inv),
+                    Point::new(b.x * inv, b.y * inv),
+                );
+                let near = p.x.max(q.x) >= lo.x
+                    && p.x.min(q.x) <= hi.x
+                    && p.y.max(q.y) >= lo.y
+                    && p.y.min(q.y) <= hi.y;
+                near.then(|| {
+                    // About the cells the segment crosses.
+                    meter.charge(sat_u32((p.x - q.x).abs() + (p.y - q.y).abs() + 2.0));
+                    !cells.segment_free(a, b)
+                })
+            });
+            if changed {
+                store.restart_sweeps();
+            }
+        }
+    }
+
+    /// Whether an agent at `p` stands inside a dynamic obstacle or a marked cell: any motion
+    /// would cross it, so it holds.
+    fn trapped(&self, p: Point) -> bool {
+        self.map.obstacles().contains_now(p) || !self.map.live().point_free(p)
     }
 
     /// The forward tree's root: where the agent is, or is heading.
@@ -589,7 +651,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// 200 instructions on a Cortex-M4F.
     ///
     /// Errors (doing nothing) when `agent` is not finite, outside the map or inside the
-    /// static map's obstacles; an agent inside a dynamic obstacle is not an error (it holds).
+    /// static map's obstacles ([`Map::in_wall`]); an agent inside a dynamic obstacle or a cell
+    /// the live overlay marked is not an error (it holds).
     pub fn plan<C: Clock + ?Sized>(
         &mut self,
         clock: &C,
@@ -601,7 +664,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.grid().contains(agent) {
             return Err(InputError::OutOfBounds);
         }
-        if !self.map.grid().point_free(agent) {
+        if self.map.in_wall(agent) {
             return Err(InputError::InObstacle);
         }
         // The call's budget starts now: anchoring and following the agent spend it too, and
@@ -610,7 +673,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         self.deferred = false;
         let meter = self.meter(clock);
         self.apply_updates(&meter);
-        let trapped = self.map.obstacles().contains_now(agent);
+        let trapped = self.trapped(agent);
         if !trapped {
             self.anchor(agent, &meter);
         }
@@ -719,7 +782,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let root = self.root_position();
         let at = agent.unwrap_or(root);
         let arrived = goal_node.is_some() && self.goal.is_some_and(|g| g.pos == at);
-        let trapped = agent.is_some() && self.map.obstacles().contains_now(at);
+        let trapped = agent.is_some() && self.trapped(at);
         // The waypoint rule (module `motion`): the root when it is clear, else a nearer point
         // on the way, else hold, else evade.
         let planned = if arrived { at } else { root };
@@ -805,10 +868,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 .extend(self.fwd.pos(id).dist(agent), crosses(id))
         };
         sort_small_by(&mut near, |&a, &b| key(a).cmp(&key(b)));
-        let grid = self.map.grid();
+        let cells = self.map.live();
         let parent = near.iter().copied().find(|&id| {
             meter.charge(4);
-            grid.segment_free(self.fwd.pos(id), agent)
+            cells.segment_free(self.fwd.pos(id), agent)
         });
         let goal = self.goal.map_or(agent, |g| g.pos);
         let anchored = parent.is_some_and(|parent| {
@@ -1301,7 +1364,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             parent = keep[0];
         }
         meter.charge(units(depth).saturating_mul(4));
-        let mut blocked = false; // the meeting segment was tested free
+        // The meeting segment was tested free; each later edge keeps both of its flags (an
+        // edge through a marked cell stays walled, or re-flagging for an obstacle would clear
+        // it).
+        let (mut blocked, mut walled) = (false, false);
         let mut v = Some(b);
         while let Some(x) = v {
             let pos = self.rev.pos(x);
@@ -1309,7 +1375,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 Ok(id) => parent = id,
                 Err(_) => return false,
             }
-            blocked = self.rev.tree.edge_blocked(x).unwrap_or(false);
+            if walled {
+                self.fwd.tree.set_edge_walled(parent, true);
+            }
+            (blocked, walled) = self.rev.tree.edge_sources(x);
             v = self.rev.tree.parent(x);
         }
         if let Some(goal) = self.goal.as_mut() {
@@ -1373,5 +1442,56 @@ mod tests {
                 assert!(p.goal_node().is_some(), "the goal joined through the meet");
             }
         }
+    }
+
+    /// Found in review before live edits landed: grafting the reverse trunk copied each
+    /// edge's blocked flag as an obstacle's, so the next re-flagging for an obstacle cleared
+    /// an edge that crosses a marked cell. The trunk's walled edge stays blocked after a
+    /// circle is added elsewhere.
+    #[test]
+    fn regression_a_grafted_trunk_keeps_its_walled_edges() {
+        let bits = [0u8; OccupancyGrid::bytes_needed(40, 40)];
+        let grid = OccupancyGrid::new(&bits, 40, 40, 1.0).unwrap();
+        let mut overlay = [0u8; OccupancyGrid::bytes_needed(40, 40)];
+        let map = Map::new(grid).with_overlay(&mut overlay).unwrap();
+        let mut storage = Storage::<64, 16>::new();
+        let cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(40.0);
+        let rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
+        let mut p = Planner::<_, _, 64, 16, 2>::new(
+            &mut storage,
+            map,
+            Euclidean,
+            rng,
+            cfg,
+            Point::new(5.0, 5.0),
+        )
+        .unwrap();
+        p.set_goal(Point::new(35.0, 5.0)).unwrap();
+        // Reverse trunk: goal <- (25, 5) <- (20, 5); a door closes between (25, 5) and the goal.
+        let rev_root = p.rev.tree.root().unwrap();
+        let mid = p
+            .rev
+            .insert(Point::new(25.0, 5.0), rev_root, false)
+            .unwrap();
+        let end = p.rev.insert(Point::new(20.0, 5.0), mid, false).unwrap();
+        p.set_cells((30, 0), (30, 39), true).unwrap();
+        let clock = FakeClock::nanos();
+        let meter = Meter::new(&clock);
+        p.apply_updates(&meter);
+        assert_eq!(p.rev.tree.edge_sources(mid), (false, true));
+        // The forward tree meets the trunk's far end.
+        let root = p.fwd.tree.root().unwrap();
+        let new = p.fwd.insert(Point::new(15.0, 5.0), root, false).unwrap();
+        assert!(p.graft(new, end, &meter));
+        let goal = p.goal_node().unwrap();
+        assert_eq!(p.fwd.tree.edge_blocked(goal), Some(true));
+        p.add_obstacle(Circle::new(Point::new(5.0, 35.0), 1.0))
+            .unwrap();
+        assert_eq!(
+            p.fwd.tree.edge_blocked(goal),
+            Some(true),
+            "re-flagging cleared it"
+        );
+        assert!(p.fwd.cost(goal).blocked);
     }
 }

@@ -36,10 +36,10 @@
 //!   node (a duplicate sample, a dense neighbourhood), so neither the duplicate test nor the
 //!   density rule can keep a reachable goal out; a node already standing on the goal (within
 //!   1e-4 of a cell) becomes the goal's node.
-//! - `Nearest` never picks a node inside a dynamic obstacle: every segment from it is
-//!   blocked, so it could be no one's parent, and as the nearest node of every sample around
-//!   the obstacle it kept the way around from growing (issue 24: a disc dropped on a grafted
-//!   trunk left RT-RRT*-1 holding for 3,000 calls).
+//! - `Nearest` never picks a node inside a dynamic obstacle or a cell the live overlay marked:
+//!   every segment from it is blocked, so it could be no one's parent, and as the nearest node
+//!   of every sample around the obstacle it kept the way around from growing (issue 24: a disc
+//!   dropped on a grafted trunk left RT-RRT*-1 holding for 3,000 calls).
 //! - Starving (liveness; not in the paper): once the density rule has turned away
 //!   [`STARVING`] states in a row while the tree's goal is not in it, a state with no node
 //!   within `e_max / sqrt(n_max)` (the spacing of `n_max` nodes spread over an `e_max` disc)
@@ -356,13 +356,16 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // A node inside a dynamic obstacle can be no one's parent (every segment from it is
         // blocked): it is nobody's nearest either, or it would capture every sample around the
         // obstacle and the way around it could never grow (issue 24, Fig. 7).
+        // Likewise a node in a cell the live overlay marked.
         let obstacles = env.map.obstacles();
+        let marked = env.map.marked_cells() > 0;
+        let cells = env.map.live();
         let positions = self.tree.positions();
         let usable = |id: NodeId| {
-            obstacles.is_empty()
+            (obstacles.is_empty() && !marked)
                 || positions
                     .get(id.index())
-                    .is_some_and(|&p| !obstacles.contains(p))
+                    .is_some_and(|&p| !obstacles.contains(p) && (!marked || cells.point_free(p)))
         };
         let (near, _) = self.index.nearest_where(x, positions, usable)?;
         if env.metric.is_euclidean() {

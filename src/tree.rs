@@ -128,8 +128,9 @@ pub struct Tree<const N: usize> {
     parent: [u16; N],
     first_child: [u16; N],
     next_sibling: [u16; N],
-    /// Bit 0: the edge from the parent is blocked. Bit 1: the cached path is blocked. Bits 2-3:
-    /// the marks of the rewiring sweeps ([`Mark`]).
+    /// Bit 0: the edge from the parent is blocked by a dynamic obstacle. Bit 1: the cached path
+    /// is blocked. Bits 2-3: the marks of the rewiring sweeps ([`Mark`]). Bit 4: the edge
+    /// crosses a cell the live overlay marked.
     flags: [u8; N],
     len: u16,
     root: u16,
@@ -137,6 +138,12 @@ pub struct Tree<const N: usize> {
 
 const EDGE_BLOCKED: u8 = 1;
 const PATH_BLOCKED: u8 = 2;
+/// Bit 4: the edge from the parent crosses a cell the live overlay marked
+/// ([`Tree::rewall_edges`]); kept apart from the obstacles' bit so that re-flagging one source
+/// never clears the other's.
+const EDGE_WALLED: u8 = 16;
+/// The edge is blocked, by an obstacle or by a marked cell.
+const EDGE_ANY: u8 = EDGE_BLOCKED | EDGE_WALLED;
 
 /// A per-node mark kept in the node's flag byte, for the rewiring sweeps' "seen" sets (two
 /// bits per node instead of a separate set; see [`crate::rewire`]).
@@ -321,10 +328,26 @@ impl<const N: usize> Tree<N> {
         (s != NONE).then_some(NodeId(s))
     }
 
-    /// Whether the edge from the node's parent is marked as crossing a dynamic obstacle.
+    /// Whether the edge from the node's parent is marked as crossing a dynamic obstacle or a
+    /// cell the live overlay marked.
     pub fn edge_blocked(&self, id: NodeId) -> Option<bool> {
         self.contains(id)
-            .then(|| rd(&self.flags, id.index(), 0) & EDGE_BLOCKED != 0)
+            .then(|| rd(&self.flags, id.index(), 0) & EDGE_ANY != 0)
+    }
+
+    /// Why the edge from the node's parent is blocked: `(by an obstacle, by a marked cell)`.
+    pub(crate) fn edge_sources(&self, id: NodeId) -> (bool, bool) {
+        let f = rd(&self.flags, id.index(), 0);
+        (f & EDGE_BLOCKED != 0, f & EDGE_WALLED != 0)
+    }
+
+    /// Sets the walled flag of the edge from `child`'s parent (see [`Tree::rewall_edges`]) and
+    /// updates the subtree's costs.
+    pub(crate) fn set_edge_walled(&mut self, child: NodeId, walled: bool) {
+        if self.contains(child) && rd_link(&self.parent, child.index()) != NONE {
+            self.set_flag(child.0, EDGE_WALLED, walled);
+            self.refresh_subtree(child.0);
+        }
     }
 
     /// The children of a node, most recently attached first.
@@ -406,6 +429,8 @@ impl<const N: usize> Tree<N> {
         self.unlink(c);
         self.link(c, parent.0);
         self.set_flag(c, EDGE_BLOCKED, edge_blocked);
+        // A new edge was tested against the live cells (`free_path`).
+        self.set_flag(c, EDGE_WALLED, false);
         Ok(self.refresh_subtree(c))
     }
 
@@ -443,6 +468,34 @@ impl<const N: usize> Tree<N> {
         changed
     }
 
+    /// Sets the walled flag of every edge `walled(parent position, child position)` decides
+    /// (`None` leaves it: the planner asks only about edges near the cells that changed), then
+    /// recomputes every cost when one changed: O(N) calls. Returns whether some flag changed.
+    pub fn rewall_edges<F>(&mut self, mut walled: F) -> bool
+    where
+        F: FnMut(Point, Point) -> Option<bool>,
+    {
+        let mut changed = false;
+        for v in 0..self.len {
+            let p = rd_link(&self.parent, v as usize);
+            if p == NONE {
+                continue;
+            }
+            let (a, b) = (
+                rd(&self.pos, p as usize, Point::ZERO),
+                rd(&self.pos, v as usize, Point::ZERO),
+            );
+            if let Some(w) = walled(a, b) {
+                changed |= (rd(&self.flags, v as usize, 0) & EDGE_WALLED != 0) != w;
+                self.set_flag(v, EDGE_WALLED, w);
+            }
+        }
+        if changed {
+            self.refresh_subtree(self.root);
+        }
+        changed
+    }
+
     /// `SetRoot`: re-roots the tree at `new_root` by reversing the edges on the path from the
     /// old root (each edge keeps its blocked flag), then recomputes every cost: O(depth + N).
     pub fn set_root(&mut self, new_root: NodeId) -> Result<(), TreeError> {
@@ -450,21 +503,23 @@ impl<const N: usize> Tree<N> {
             return Err(TreeError::UnknownNode);
         }
         let mut prev = NONE;
-        let mut prev_flag = false;
+        let mut prev_flag = 0;
         let mut cur = new_root.0;
         for _ in 0..self.len {
             if cur == NONE {
                 break;
             }
             let next = rd_link(&self.parent, cur as usize);
-            let flag = rd(&self.flags, cur as usize, 0) & EDGE_BLOCKED != 0;
+            let flag = rd(&self.flags, cur as usize, 0) & EDGE_ANY;
             self.unlink(cur);
             if prev != NONE {
                 self.link(cur, prev);
             }
-            // The edge between `prev` and `cur` now hangs below `prev`; it keeps its flag,
-            // which was stored at `prev` while `cur` was its parent.
-            self.set_flag(cur, EDGE_BLOCKED, prev_flag);
+            // The edge between `prev` and `cur` now hangs below `prev`; it keeps its flags,
+            // which were stored at `prev` while `cur` was its parent.
+            if let Some(f) = self.flags.get_mut(cur as usize) {
+                *f = (*f & !EDGE_ANY) | prev_flag;
+            }
             prev_flag = flag;
             prev = cur;
             cur = next;
@@ -613,7 +668,7 @@ impl<const N: usize> Tree<N> {
             } else {
                 self.cost_of(p).extend(
                     rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, i, Point::ZERO)),
-                    rd(&self.flags, i, 0) & EDGE_BLOCKED != 0,
+                    rd(&self.flags, i, 0) & EDGE_ANY != 0,
                 )
             };
             let cached = self.cost_of(v);
@@ -705,7 +760,7 @@ impl<const N: usize> Tree<N> {
         }
         let c = self.cost_of(p).extend(
             rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, i, Point::ZERO)),
-            rd(&self.flags, i, 0) & EDGE_BLOCKED != 0,
+            rd(&self.flags, i, 0) & EDGE_ANY != 0,
         );
         wr(&mut self.cost, i, c.length);
         self.set_flag(v, PATH_BLOCKED, c.blocked);

@@ -22,7 +22,7 @@ use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
 use crate::hprintln;
-use crate::mission::MissionStorage;
+use crate::mission::{Metres, MissionStorage};
 use crate::scenario;
 
 /// Most `plan` calls made per goal.
@@ -235,7 +235,7 @@ pub fn exported_mission<C: Clock>(
                 "goal {}: reached {}, path {} m, {} collisions, {} plan calls",
                 i + 1,
                 r.reached,
-                r.travelled,
+                Metres(r.travelled),
                 r.collisions,
                 r.calls
             );
@@ -263,7 +263,7 @@ pub fn exported_mission<C: Clock>(
             cfg.budget.t_exp.as_millis(),
             reached,
             goals.len(),
-            travelled,
+            Metres(travelled),
             calls,
             expansions,
             expansions / u64::from(calls.max(1)),
@@ -280,7 +280,7 @@ pub fn exported_mission<C: Clock>(
             cfg.budget.t_exp.as_millis(),
             r.reached,
             search_ms,
-            r.travelled,
+            Metres(r.travelled),
             r.collisions,
             r.nodes_at_goal.unwrap_or(0),
             nodes,

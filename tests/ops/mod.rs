@@ -8,11 +8,13 @@
 //! change or clear the goal; plan with the agent moved towards its waypoint, teleported, or
 //! placed anywhere (outside the map, NaN); grow; add circles anywhere (on the agent, between
 //! the agent and its waypoint, on the goal), still or moving, submit new states for them, and
-//! remove them; a stated motion (agent and obstacle speeds, period, horizon); read the path;
-//! all with frozen,
+//! remove them; a stated motion (agent and obstacle speeds, period, horizon); mark and clear
+//! cells of a live overlay (any rectangle, some outside the grid); read the path; all with
+//! frozen,
 //! stepping, work-driven and jumping clocks. After every operation both trees must be valid, and
 //! after every `plan` the waypoint rule must hold: the waypoint is the agent's position or
-//! reachable from it over a segment free of the map and every circle present.
+//! reachable from it over a segment free of the live map and every circle present, and no
+//! edge flagged free crosses a live occupied cell.
 #![allow(dead_code)]
 
 use core::time::Duration;
@@ -244,7 +246,14 @@ fn drive<M: Metric, const N: usize, const B: usize>(
     b: &mut Bytes<'_>,
 ) -> Result<(), String> {
     let mut storage = Box::new(Storage::<N, B>::new());
-    let map = Map::<K>::new(grid);
+    let mut overlay = vec![0u8; OccupancyGrid::bytes_needed(grid.cols(), grid.rows())];
+    let map = if b.u8().is_multiple_of(2) {
+        Map::<K>::new(grid)
+            .with_overlay(&mut overlay)
+            .map_err(|e| format!("overlay refused: {e}"))?
+    } else {
+        Map::<K>::new(grid)
+    };
     let rng = XorShiftRng::seed_from_u64(seed);
     let Ok(mut p) = Planner::new(&mut storage, map, metric, rng, cfg, start) else {
         return Ok(()); // refused with an error: fine
@@ -259,8 +268,10 @@ fn drive<M: Metric, const N: usize, const B: usize>(
         if b.done() {
             break;
         }
+        // A call ran (and applied every edit).
+        let mut called = false;
         let op = b.u8();
-        match op % 13 {
+        match op % 14 {
             0 => {
                 let g = b.point(w, h);
                 let _ = p.set_goal(g);
@@ -269,7 +280,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             2..=5 => {
                 // Plan: the agent moves towards its last waypoint (most often), teleports, or
                 // is placed anywhere.
-                let next = match op % 13 {
+                let next = match op % 14 {
                     2 | 3 => agent.step_towards(waypoint, 0.1 + b.unit() * cfg.search.e_max),
                     4 => b.point(w, h),
                     _ => p.root_position(),
@@ -282,6 +293,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                 }
                 match p.plan(&clock, next) {
                     Ok(pr) => {
+                        called = true;
                         agent = next;
                         waypoint = pr.waypoint;
                         if pr.waypoint != agent && !p.map().free_now(agent, pr.waypoint) {
@@ -295,7 +307,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                         }
                     }
                     Err(_) => {
-                        if next.is_finite() && grid.contains(next) && grid.point_free(next) {
+                        if next.is_finite() && grid.contains(next) && !p.map().in_wall(next) {
                             return Err(format!("a valid agent position {next:?} refused"));
                         }
                     }
@@ -303,11 +315,12 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             }
             6 => {
                 let _ = p.grow(&clock);
+                called = true;
             }
             7..=9 => {
                 // A circle: anywhere, on the agent, between agent and waypoint, on the goal.
                 let r = b.unit() * w.max(h) * 0.1;
-                let c = match op % 13 {
+                let c = match op % 14 {
                     7 => b.point(w, h),
                     8 => agent.lerp(waypoint, b.unit()),
                     _ => p.goal().unwrap_or(agent),
@@ -330,6 +343,13 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             11 => {
                 let _ = p.path(&mut path);
             }
+            13 => {
+                // Mark or clear a rectangle of cells, sometimes reaching outside the grid.
+                let corner = |b: &mut Bytes<'_>, n: u16| b.u16() % n.saturating_add(2);
+                let a = (corner(b, grid.cols()), corner(b, grid.rows()));
+                let c = (corner(b, grid.cols()), corner(b, grid.rows()));
+                let _ = p.set_cells(a, c, b.u8().is_multiple_of(2));
+            }
             _ => {
                 // Submit a new state for an obstacle (or an unknown id): moved anywhere, any
                 // velocity and horizon, sometimes not finite.
@@ -341,6 +361,20 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                 let r = b.unit() * w.max(h) * 0.1;
                 let c = b.point(w, h);
                 let _ = p.update_obstacle(id, moving(b, Circle::new(c, r), w, h));
+            }
+        }
+        if called {
+            // The call applied every edit: an edge flagged free crosses no live occupied cell.
+            let live = p.map().live();
+            for t in [p.tree(), p.reverse_tree()] {
+                for id in t.ids() {
+                    if let (Some(q), Some(false)) = (t.parent(id), t.edge_blocked(id)) {
+                        let (a, c) = (t.position(q).unwrap(), t.position(id).unwrap());
+                        if !live.segment_free(a, c) {
+                            return Err(format!("edge {a:?}-{c:?} flagged free crosses a cell"));
+                        }
+                    }
+                }
             }
         }
         p.tree()

@@ -40,6 +40,7 @@ fn point() -> Point {
 fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     storage: &mut Storage<N, B>,
     grid: OccupancyGrid<'_>,
+    overlay: &mut [u8],
     metric: M,
 ) -> u32 {
     let mut cfg = black_box(Config::table1()[black_box(7usize) % 20]);
@@ -51,9 +52,12 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     });
     let _ = black_box(cfg.validate());
     let rng = XorShiftRng::seed_from_u64(black_box(1));
-    let Ok(mut p) =
-        Planner::<_, _, N, B, 4>::new(storage, Map::new(grid), metric, rng, cfg, point())
-    else {
+    // A live overlay (when the opaque buffer is long enough).
+    let map = match Map::new(grid).with_overlay(overlay) {
+        Ok(m) => m,
+        Err(_) => Map::new(grid),
+    };
+    let Ok(mut p) = Planner::<_, _, N, B, 4>::new(storage, map, metric, rng, cfg, point()) else {
         return 0;
     };
     let clock = FakeClock::nanos()
@@ -77,6 +81,15 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
         let _ = p.update_obstacle(black_box(ObstacleId(7)), walker);
         let _ = p.grow(&clock);
     }
+    // Live cell edits: marked and cleared, planned against, read.
+    let cell = |v: u16| black_box(v);
+    let _ = p.set_cells((cell(3), cell(0)), (cell(3), cell(19)), black_box(true));
+    let _ = p.plan(&clock, point());
+    let _ = p.set_cells((cell(3), cell(5)), (cell(70), cell(6)), black_box(false));
+    let _ = p.grow(&clock);
+    let live = p.map().live();
+    let _ = black_box(live.is_occupied(cell(3), cell(4)) ^ live.segment_free(point(), point()));
+    let _ = black_box(p.map().in_wall(point()) ^ live.point_free(point()));
     let _ = run_to_goal(
         &mut p,
         &clock,
@@ -122,16 +135,17 @@ fn main() -> ! {
             true
         });
         let mut storage = Storage::<32, 8>::new();
+        let mut overlay = [0u8; 64];
         if let Ok(t) = DiffusionTable::new(black_box(&table[..])) {
             let mut coords = [0f32; 4];
             sink ^= t.coordinates(point(), &mut coords) as u32;
             sink ^= t.distance(point(), point()).to_bits();
-            sink ^= exercise_planner(&mut storage, g, t);
+            sink ^= exercise_planner(&mut storage, g, black_box(&mut overlay[..]), t);
         }
         if let Ok(t) = DiffusionTable::new_unverified(black_box(&table[..])) {
             sink ^= t.distance(point(), point()).to_bits();
         }
-        sink ^= exercise_planner(&mut storage, g, Euclidean);
+        sink ^= exercise_planner(&mut storage, g, black_box(&mut overlay[..]), Euclidean);
     }
     // Tree and index on their own.
     let mut tree: Tree<16> = Tree::new();
