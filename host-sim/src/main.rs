@@ -87,8 +87,10 @@ enum Command {
         animate: Option<u32>,
     },
     /// People walking across and along the agent's first leg (issue 27): the same walkers
-    /// reported as still circles, with their velocity, and by an oracle; collisions by kind,
-    /// waiting time, travelled / optimal (runs.csv, summary.md, moving.png, pictures).
+    /// reported as still circles, with their velocity, and by an oracle; a door that closes
+    /// and opens (as circles or as live cells) or stays closed (live cells or a rebaked
+    /// table); collisions by kind, waiting time, travelled / optimal (runs.csv, summary.md,
+    /// moving.png, pictures).
     Moving {
         /// A built-in scenario (default office_200) ...
         #[arg(long, default_value = "office_200")]
@@ -99,7 +101,7 @@ enum Command {
         /// Scenario name in --scenarios.
         #[arg(long)]
         scenario: Option<String>,
-        /// Scenes: crossing, head-on (comma-separated).
+        /// Scenes: crossing, head-on, door, closed-door (comma-separated).
         #[arg(
             long,
             value_enum,

@@ -6,7 +6,11 @@
 //!   over the free width there (a corridor's, at most 6 m either side), timed to be near
 //!   their crossing when the agent passes;
 //! - `head-on`: two people walk the route backwards at 1.0-1.5 m/s, from 15-25 m and 35-45 m
-//!   ahead of the start, towards the agent, turning at its corners.
+//!   ahead of the start, towards the agent, turning at its corners;
+//! - `door`: a door across the route (at its narrowest passage between 25 % and 75 % of its
+//!   length, a band 1.5 cells thick across the free width) closes when the agent comes within
+//!   4 m and opens [`DOOR_CLOSED_S`] later;
+//! - `closed-door`: the same door, closed from the start (what not rebaking the table costs).
 //!
 //! Treatments (the planner, the agent and the walkers are the same; only the reports differ):
 //! - `static`: the walkers re-submitted every call as still circles, nothing stated about
@@ -15,6 +19,15 @@
 //!   without notice), with the motion stated ([`motion`]);
 //! - `oracle`: the same, each prediction trusted exactly until the walker's next turn (it knows
 //!   when its prediction ends; past it the disc grows at the stated top speed).
+//!
+//! The door scenes compare (no walkers, no motion stated):
+//! - `static` (door): the closed door submitted as eight still circles along it, today's
+//!   interface without live cells;
+//! - `live`: its cells marked and cleared in the map's live overlay (`Planner::set_cells`), the
+//!   diffusion table as baked from the open map;
+//! - `rebaked` (closed-door): the door closed in the map itself, with a table baked for it: the
+//!   difference from `live` is what not rebaking costs. Travelled / optimal is against the
+//!   open map's optimum for `door` and the closed map's for `closed-door`.
 //!
 //! The agent drives at 1 m/s, one period (0.1 s) per call; the planner has a fixed virtual
 //! budget per call. Every period is checked in continuous time (10 sub-steps, the closest
@@ -42,7 +55,7 @@ use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
 use crate::draw::{Animation, Painter};
 use crate::report::{BarPanel, Bars, render};
 use crate::run::scene;
-use crate::sim::{Prepared, with_planner};
+use crate::sim::{Prepared, SimPlanner, with_live_planner, with_planner};
 use crate::stats::median;
 
 /// The agent's top speed, m/s.
@@ -67,6 +80,10 @@ pub enum Kind {
     Crossing,
     /// People walking the route towards the agent.
     HeadOn,
+    /// A door on the route closes when the agent is near and opens 20 s later.
+    Door,
+    /// The same door, closed from the start.
+    ClosedDoor,
 }
 
 /// How the walkers are reported.
@@ -79,17 +96,29 @@ pub enum Treatment {
     Predicted,
     /// Velocities trusted until the next turn.
     Oracle,
+    /// The door's cells marked and cleared in the live overlay; the table as baked.
+    Live,
+    /// The door closed in the map itself, with a diffusion table baked for it.
+    Rebaked,
 }
 
 impl Treatment {
-    /// All three, in the order of the charts.
-    pub const ALL: [Treatment; 3] = [Self::Static, Self::Predicted, Self::Oracle];
+    /// All of them, in the order of the charts.
+    pub const ALL: [Treatment; 5] = [
+        Self::Static,
+        Self::Predicted,
+        Self::Oracle,
+        Self::Live,
+        Self::Rebaked,
+    ];
 
     fn name(self) -> &'static str {
         match self {
             Self::Static => "static",
             Self::Predicted => "predicted",
             Self::Oracle => "oracle",
+            Self::Live => "live",
+            Self::Rebaked => "rebaked",
         }
     }
 }
@@ -99,6 +128,27 @@ impl Kind {
         match self {
             Self::Crossing => "crossing",
             Self::HeadOn => "head-on",
+            Self::Door => "door",
+            Self::ClosedDoor => "closed-door",
+        }
+    }
+
+    /// The treatments compared in this scene.
+    fn treatments(self) -> &'static [Treatment] {
+        match self {
+            Self::Crossing | Self::HeadOn => {
+                &[Treatment::Static, Treatment::Predicted, Treatment::Oracle]
+            }
+            Self::Door => &[Treatment::Static, Treatment::Live],
+            Self::ClosedDoor => &[Treatment::Live, Treatment::Rebaked],
+        }
+    }
+
+    /// The treatment whose seed 0 gets pictures.
+    fn pictured(self) -> Treatment {
+        match self {
+            Self::Crossing | Self::HeadOn => Treatment::Predicted,
+            Self::Door | Self::ClosedDoor => Treatment::Live,
         }
     }
 }
@@ -239,6 +289,101 @@ fn unit(rng: &mut XorShiftRng) -> f32 {
     (rng.next_u32() >> 8) as f32 / 16_777_216.0
 }
 
+/// The free width either side of `x` along `n` and `-n`, at most 6 m each (0.1 m steps).
+fn free_width(grid: &bi_am_rrt::OccupancyGrid<'_>, x: Point, n: Point) -> (f32, f32) {
+    let reach = |sign: f32| {
+        let mut r = 0.0f32;
+        while r < 6.0 {
+            let q = x + n * (sign * (r + 0.1));
+            if !grid.point_free(q) {
+                break;
+            }
+            r += 0.1;
+        }
+        r
+    };
+    (reach(-1.0), reach(1.0))
+}
+
+/// Seconds the `door` scene's door stays closed.
+pub const DOOR_CLOSED_S: f32 = 20.0;
+/// The `door` scene's door closes when the agent comes this near (metres).
+const DOOR_NEAR: f32 = 4.0;
+
+/// A door across the route: at its narrowest passage between 25 % and 75 % of its length, a
+/// band of cells 1.5 cells (at least 0.3 m) thick across the free width.
+#[derive(Clone, Debug)]
+struct Door {
+    /// The free cells it closes.
+    cells: Vec<(u16, u16)>,
+    /// Where the route crosses it.
+    centre: Point,
+    /// Its ends (for the circles of the `static` treatment).
+    ends: (Point, Point),
+}
+
+fn door(grid: &bi_am_rrt::OccupancyGrid<'_>, route: &[Point]) -> Result<Door> {
+    let total: f32 = route.windows(2).map(|w| w[0].dist(w[1])).sum();
+    let mut best: Option<(f32, Point, Point, f32, f32)> = None;
+    let mut s = 0.25 * total;
+    while s <= 0.75 * total {
+        let (x, d) = along(route, s);
+        let n = Point::new(-d.y, d.x);
+        let (a, b) = free_width(grid, x, n);
+        if a + b >= 0.6 && best.is_none_or(|(w, ..)| a + b < w) {
+            best = Some((a + b, x, d, a, b));
+        }
+        s += 0.25;
+    }
+    let (_, x, d, a, b) = best.context("no passage on the route for a door")?;
+    let n = Point::new(-d.y, d.x);
+    let cell = grid.cell_size();
+    let half = (0.75 * cell).max(0.15);
+    let (lo, hi) = (-a - half, b + half);
+    let mut cells = Vec::new();
+    let reach = hi.max(-lo) + 2.0 * cell;
+    let (c0, r0) = grid.cell_of(x - Point::new(reach, reach)).unwrap_or((0, 0));
+    let (c1, r1) = grid
+        .cell_of(x + Point::new(reach, reach))
+        .unwrap_or((grid.cols() - 1, grid.rows() - 1));
+    for r in r0..=r1 {
+        for c in c0..=c1 {
+            let q = grid.cell_center(c, r) - x;
+            let (u, v) = (q.dot(d), q.dot(n));
+            if u.abs() <= half && v >= lo && v <= hi && !grid.is_occupied(c, r) {
+                cells.push((c, r));
+            }
+        }
+    }
+    Ok(Door {
+        cells,
+        centre: x,
+        ends: (x + n * lo, x + n * hi),
+    })
+}
+
+/// The grid with the door closed.
+fn closed_grid(grid: &crate::maps::OwnedGrid, door: &Door) -> crate::maps::OwnedGrid {
+    let mut g = grid.clone();
+    for &(c, r) in &door.cells {
+        let i = r as usize * g.width as usize + c as usize;
+        g.bits[i / 8] |= 1 << (i % 8);
+    }
+    g
+}
+
+/// The discs the `static` treatment submits for a closed door: eight along its line, each
+/// overlapping its neighbours and at least 0.75 of a cell across.
+fn door_discs(door: &Door, cell: f32) -> Vec<Circle> {
+    let (p, q) = door.ends;
+    let span = p.dist(q);
+    let n = 8;
+    let r = (0.75 * cell).max(1.3 * span / (2.0 * n as f32));
+    (0..n)
+        .map(|i| Circle::new(p.lerp(q, (i as f32 + 0.5) / n as f32), r))
+        .collect()
+}
+
 /// The walkers of one run.
 fn walkers(prep: &Prepared, route: &[Point], kind: Kind, seed: u64) -> Vec<Walker> {
     let mut rng = XorShiftRng::seed_from_u64(seed.wrapping_mul(0x9e37_79b9) ^ 0x5eed);
@@ -252,19 +397,7 @@ fn walkers(prep: &Prepared, route: &[Point], kind: Kind, seed: u64) -> Vec<Walke
                 let s = total * (0.15 + 0.7 * (i as f32 + unit(&mut rng)) / 5.0);
                 let (x, d) = along(route, s);
                 let n = Point::new(-d.y, d.x);
-                // The free width either side, at most 6 m.
-                let reach = |sign: f32| {
-                    let mut r = 0.0f32;
-                    while r < 6.0 {
-                        let q = x + n * (sign * (r + 0.1));
-                        if !grid.point_free(q) {
-                            break;
-                        }
-                        r += 0.1;
-                    }
-                    r
-                };
-                let (a, b) = (reach(-1.0), reach(1.0));
+                let (a, b) = free_width(&grid, x, n);
                 if a + b < 1.0 {
                     continue;
                 }
@@ -288,6 +421,7 @@ fn walkers(prep: &Prepared, route: &[Point], kind: Kind, seed: u64) -> Vec<Walke
                 });
             }
         }
+        Kind::Door | Kind::ClosedDoor => {}
         Kind::HeadOn => {
             for base in [15.0f32, 35.0] {
                 let s0 = (base + 10.0 * unit(&mut rng)).min(total * 0.9);
@@ -323,8 +457,8 @@ fn report(w: &Walker, t: f32, treatment: Treatment) -> Moving {
     let c = Circle::new(pos, w.radius);
     match treatment {
         Treatment::Static => Moving::still(c),
-        Treatment::Predicted => Moving::new(c, vel),
         Treatment::Oracle => Moving::new(c, vel).trusted_for(turn),
+        Treatment::Predicted | Treatment::Live | Treatment::Rebaked => Moving::new(c, vel),
     }
 }
 
@@ -483,6 +617,178 @@ fn one(
     })
 }
 
+/// One run of a door scene. `closed`: the scenario with the door closed in its map (and its
+/// own diffusion table), for `closed-door`.
+#[allow(clippy::too_many_arguments)]
+fn door_one(
+    prep: &Prepared,
+    closed: Option<&Prepared>,
+    base: Config,
+    door: &Door,
+    kind: Kind,
+    treatment: Treatment,
+    seed: u64,
+    t_exp: Duration,
+    pictures: Option<(&Path, Option<u32>)>,
+) -> Result<MovingRow> {
+    let mut cfg = base;
+    cfg.budget.t_exp = t_exp;
+    cfg.motion = Motion::NONE;
+    let shut = closed_grid(&prep.scenario.map, door);
+    let optimum = match kind {
+        Kind::ClosedDoor => closed.context("closed-door needs its map")?.optima()[0],
+        _ => prep.optima()[0],
+    }
+    .unwrap_or(f64::NAN);
+    let body = |p: &mut SimPlanner<'_, '_>| -> Result<MovingRow> {
+        let goal = prep.scenario.goals[0];
+        let mut row = MovingRow {
+            kind,
+            treatment,
+            seed,
+            reached: false,
+            time_s: 0.0,
+            waiting_s: 0.0,
+            moved_into: 0,
+            ran_into: 0,
+            evading_calls: 0,
+            cornered_calls: 0,
+            travelled_ratio: f64::NAN,
+            max_work: 0,
+        };
+        let set = |p: &mut SimPlanner<'_, '_>, occupied: bool| -> Result<()> {
+            for &c in &door.cells {
+                p.set_cells(c, c, occupied).map_err(|e| anyhow!("{e}"))?;
+            }
+            Ok(())
+        };
+        // `closed_since`: when the door closed (while it is closed).
+        let mut closed_since = None;
+        if kind == Kind::ClosedDoor && treatment == Treatment::Live {
+            set(p, true)?;
+            closed_since = Some(0.0f32);
+        }
+        p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
+        let mut agent = prep.scenario.start;
+        let mut trail = vec![agent];
+        let mut discs = Vec::new();
+        let mut opened = false;
+        let mut touching = false;
+        let small = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 560));
+        let mut gif = match (pictures, small.as_ref()) {
+            (Some((dir, Some(_))), Some(small)) => Some(Animation::new(
+                small,
+                &dir.join(format!("{}.gif", kind.name())),
+                100,
+            )?),
+            _ => None,
+        };
+        let shown = |s: &mut crate::draw::Scene, closed: bool| {
+            if closed {
+                let r = 0.6 * prep.scenario.map.grid().cell_size();
+                s.circles.extend(
+                    door.cells
+                        .iter()
+                        .map(|&(c, w)| Circle::new(prep.scenario.map.grid().cell_center(c, w), r)),
+                );
+            }
+        };
+        let title = |call: u32| {
+            format!(
+                "{} {}, {}, seed {seed}, t = {:.1} s",
+                prep.scenario.name,
+                kind.name(),
+                treatment.name(),
+                call as f32 * PERIOD
+            )
+        };
+        let max_calls = 6000;
+        let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
+        let mut travelled = 0.0f64;
+        for call in 0..max_calls {
+            let t = call as f32 * PERIOD;
+            if kind == Kind::Door {
+                if closed_since.is_none() && !opened && agent.dist(door.centre) < DOOR_NEAR {
+                    closed_since = Some(t);
+                    if treatment == Treatment::Static {
+                        for c in door_discs(door, prep.scenario.map.grid().cell_size()) {
+                            discs.push(p.add_obstacle(c).map_err(|e| anyhow!("{e}"))?);
+                        }
+                    } else {
+                        set(p, true)?;
+                    }
+                    if !shut.grid().point_free(agent) {
+                        row.ran_into += 1;
+                    }
+                } else if closed_since.is_some_and(|c| t - c >= DOOR_CLOSED_S) {
+                    closed_since = None;
+                    opened = true;
+                    for id in discs.drain(..) {
+                        p.remove_obstacle(id).map_err(|e| anyhow!("{e}"))?;
+                    }
+                    if treatment == Treatment::Live {
+                        set(p, false)?;
+                    }
+                }
+            }
+            let pr = p.plan(&clock, agent).map_err(|e| anyhow!("{e}"))?;
+            row.max_work = row.max_work.max(pr.work);
+            if pr.status == Status::Arrived {
+                row.reached = true;
+                break;
+            }
+            let next = agent.step_towards(pr.waypoint, AGENT_SPEED * PERIOD);
+            let moved = next != agent;
+            if !moved {
+                row.waiting_s += PERIOD as f64;
+            }
+            // Closed (or closed in the map): a move that touches the door's cells.
+            let shut_now = closed_since.is_some() || treatment == Treatment::Rebaked;
+            let hit = shut_now && moved && !shut.grid().segment_free(agent, next);
+            if hit && !touching {
+                row.moved_into += 1;
+            }
+            touching = hit;
+            travelled += agent.dist(next) as f64;
+            agent = next;
+            trail.push(agent);
+            if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
+                && call % every == 0
+            {
+                let mut s = scene(p, &trail, &prep.scenario, 0, title(call));
+                s.forward.clear();
+                s.reverse.clear();
+                shown(&mut s, closed_since.is_some());
+                g.frame(&s)?;
+            }
+            row.time_s = (call + 1) as f64 * PERIOD as f64;
+        }
+        row.travelled_ratio = travelled / optimum;
+        if let Some((dir, _)) = pictures {
+            let painter = Painter::new(prep.scenario.map.grid(), 900);
+            let mut s = scene(
+                p,
+                &trail,
+                &prep.scenario,
+                0,
+                title((row.time_s / PERIOD as f64) as u32),
+            );
+            s.reverse.clear();
+            shown(&mut s, closed_since.is_some());
+            painter.png(&s, &dir.join(format!("{}.png", kind.name())))?;
+        }
+        Ok(row)
+    };
+    match treatment {
+        Treatment::Rebaked => {
+            let closed = closed.context("rebaked needs the closed map")?;
+            with_planner(closed, cfg, seed, body)
+        }
+        Treatment::Live => with_live_planner(prep, cfg, seed, body),
+        _ => with_planner(prep, cfg, seed, body),
+    }
+}
+
 /// Runs `moving` on `prep` with the tuned planner.
 pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}", args.out.display()))?;
@@ -490,21 +796,69 @@ pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
     let route = route(prep, base)?;
     let mut jobs = Vec::new();
     for &kind in &args.kinds {
-        for treatment in Treatment::ALL {
+        for &treatment in kind.treatments() {
             for seed in 0..args.seeds {
                 jobs.push((kind, treatment, seed));
             }
         }
     }
+    let doors = args
+        .kinds
+        .iter()
+        .any(|k| matches!(k, Kind::Door | Kind::ClosedDoor));
+    let door = doors
+        .then(|| door(&prep.scenario.map.grid(), &route))
+        .transpose()?;
+    // The scenario with the door closed in its map: its table is baked here, once.
+    let closed = match &door {
+        Some(d) if args.kinds.contains(&Kind::ClosedDoor) => {
+            let mut sc = prep.scenario.clone();
+            sc.map = closed_grid(&prep.scenario.map, d);
+            let closed = Prepared::with_table(sc, prep.table);
+            if base.metric == bi_am_rrt::MetricKind::Diffusion {
+                closed.diffusion()?;
+            }
+            Some(closed)
+        }
+        _ => None,
+    };
+    if let Some(d) = &door {
+        println!(
+            "door: {} cells across the route at ({:.2}, {:.2}), {:.2} m wide{}",
+            d.cells.len(),
+            d.centre.x,
+            d.centre.y,
+            d.ends.0.dist(d.ends.1),
+            closed
+                .as_ref()
+                .and_then(|c| c.bake_seconds.get())
+                .map_or(String::new(), |s| format!(
+                    "; rebaking the table took {s:.2} s"
+                ))
+        );
+    }
     let bar = indicatif::ProgressBar::new(jobs.len() as u64);
     let rows: Vec<MovingRow> = jobs
         .par_iter()
         .map(|&(kind, treatment, seed)| {
-            let pictures = (seed == 0 && treatment == Treatment::Predicted)
+            let pictures = (seed == 0 && treatment == kind.pictured())
                 .then_some((args.out.as_path(), args.animate));
-            let r = one(
-                prep, base, &route, kind, treatment, seed, args.t_exp, pictures,
-            );
+            let r = match (&door, kind) {
+                (Some(d), Kind::Door | Kind::ClosedDoor) => door_one(
+                    prep,
+                    closed.as_ref(),
+                    base,
+                    d,
+                    kind,
+                    treatment,
+                    seed,
+                    args.t_exp,
+                    pictures,
+                ),
+                _ => one(
+                    prep, base, &route, kind, treatment, seed, args.t_exp, pictures,
+                ),
+            };
             bar.inc(1);
             r
         })
@@ -537,7 +891,7 @@ fn summarise(map: &str, rows: &[MovingRow], args: &MovingArgs) -> String {
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for &kind in &args.kinds {
-        for treatment in Treatment::ALL {
+        for &treatment in kind.treatments() {
             let mine: Vec<&MovingRow> = rows
                 .iter()
                 .filter(|r| r.kind == kind && r.treatment == treatment)
@@ -600,7 +954,7 @@ fn chart(rows: &[MovingRow], kinds: &[Kind], stem: &Path) -> Result<()> {
                             .iter()
                             .filter(|r| r.kind == k && r.treatment == t)
                             .collect();
-                        f(&mine)
+                        if mine.is_empty() { None } else { f(&mine) }
                     })
                     .collect()
             })
@@ -616,7 +970,7 @@ fn chart(rows: &[MovingRow], kinds: &[Kind], stem: &Path) -> Result<()> {
         median(&mut v)
     };
     let bars = Bars {
-        title: "Moving obstacles: static, predicted, oracle".into(),
+        title: "Moving obstacles and live cells, by treatment".into(),
         cols: 3,
         panels: vec![
             panel("Collisions (all runs)", "contacts", &|m| {

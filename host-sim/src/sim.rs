@@ -192,6 +192,35 @@ pub fn with_planner_in<const N: usize, T>(
     f(&mut planner)
 }
 
+/// [`with_planner`] on a map with a live overlay ([`bi_am_rrt::map::Overlay`]): cells the run
+/// marks and clears with `set_cells` (issue 27's door).
+pub fn with_live_planner<T>(
+    prep: &Prepared,
+    cfg: Config,
+    seed: u64,
+    f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
+) -> Result<T> {
+    prep.scenario.validate()?;
+    let grid = prep.scenario.map.grid();
+    let mut overlay = vec![0u8; bi_am_rrt::OccupancyGrid::bytes_needed(grid.cols(), grid.rows())];
+    let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
+    let metric = prep.metric(cfg.metric)?;
+    let map = Map::new(grid)
+        .with_overlay(&mut overlay)
+        .map_err(|e| anyhow!("overlay: {e}"))?;
+    let rng = XorShiftRng::seed_from_u64(seed);
+    let mut planner = Planner::new(
+        &mut storage,
+        map,
+        metric,
+        rng,
+        prep.config(cfg),
+        prep.scenario.start,
+    )
+    .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
+    f(&mut planner)
+}
+
 /// One goal of a run.
 #[derive(Clone, Copy, Debug)]
 pub struct GoalRun {
