@@ -71,6 +71,18 @@
 //! is clear, gives way ([`Wait::GivingWay`]), evades ([`Status::Evading`]) or, with nothing
 //! clear, holds ([`Wait::Cornered`]). Within its first period a move never comes nearer any
 //! obstacle than holding would, whatever the obstacle does within the stated top speed.
+//!
+//! # Live cells (beyond the paper)
+//!
+//! On a map with an overlay ([`crate::map::Overlay`]) the caller marks and clears cells
+//! ([`Planner::set_cells`], O(cells)); the next call re-tests every edge of both trees whose
+//! bounding box comes within a cell of the changed cells (a box test per edge, then the cells
+//! of each edge near it, charged to that call) and sets the edge's *walled* flag, kept apart
+//! from the obstacles' flag so that re-flagging for a circle never clears it. Costs treat a
+//! walled edge as a blocked one (the paper's rule for circles): rewiring moves nodes off it, the
+//! agent is never sent across it, and it reopens when its cells clear. New edges, the agent's
+//! anchor, sampling and the waypoint rule read the live cells; a node in a marked cell is
+//! nobody's `Nearest`; an agent in a marked cell holds. The assisting metric is not rebaked.
 
 use rand_core::Rng;
 

@@ -10,6 +10,11 @@
 //! call their positions and velocities are submitted (`update_obstacle`) under a stated motion
 //! (issue 27: the cost of moving obstacles on the chip). One protocol call is 0.5 s of the
 //! world's time (the agent's 0.7 m a call is 1.4 m/s).
+//!
+//! With `BIAMRRT_DOOR=1` at build time the map gets a live overlay (a buffer of the grid's size
+//! on the stack): a door of 3 x 13 cells across the line from the start to goal 1, halfway,
+//! closes (`set_cells`) when the agent comes within 15 m of it and opens 40 calls later (issue
+//! 27: the cost of live cells on the chip).
 
 use bi_am_rrt::agent::{Protocol, run_to_goal};
 use bi_am_rrt::clock::Clock;
@@ -34,6 +39,27 @@ const WORLD_PERIOD: f32 = 0.5;
 /// Walkers (`BIAMRRT_WALKERS` at build time, 0-4): a constant, so that without them none of
 /// their code is built (the flash budget is tight).
 const WALKERS: usize = walkers_from(option_env!("BIAMRRT_WALKERS"));
+
+/// A door closing and opening across goal 1's line (`BIAMRRT_DOOR` at build time).
+const DOOR: bool = option_env!("BIAMRRT_DOOR").is_some();
+/// Calls the door stays closed.
+const DOOR_CALLS: u32 = 40;
+
+/// The door's corner cells: 3 cells thick along the line from `start` to `goal`, 13 across it,
+/// centred halfway (clamped to the grid).
+fn door_cells(grid: &OccupancyGrid<'_>, start: Point, goal: Point) -> ((u16, u16), (u16, u16)) {
+    let mid = start.lerp(goal, 0.5);
+    let (c, r) = grid.cell_of(mid).unwrap_or((0, 0));
+    let d = goal - start;
+    let (dc, dr) = if d.x.abs() > d.y.abs() {
+        (1, 6)
+    } else {
+        (6, 1)
+    };
+    let lo = (c.saturating_sub(dc), r.saturating_sub(dr));
+    let hi = ((c + dc).min(grid.cols() - 1), (r + dr).min(grid.rows() - 1));
+    (lo, hi)
+}
 
 /// The decimal digits of `v`, at most 4.
 const fn walkers_from(v: Option<&str>) -> usize {
@@ -144,7 +170,18 @@ pub fn exported_mission<C: Clock>(
         hprintln!("scenario: bad grid or table in flash");
         return false;
     };
-    let map: Map<'static, 4> = Map::new(grid);
+    let mut overlay = [0u8; if DOOR { scenario::GRID.len() } else { 0 }];
+    let map: Map<'_, 4> = if DOOR {
+        match Map::new(grid).with_overlay(&mut overlay) {
+            Ok(m) => m,
+            Err(_) => {
+                hprintln!("scenario: overlay refused");
+                return false;
+            }
+        }
+    } else {
+        Map::new(grid)
+    };
     // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
     // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
     let base = Config::bi_am_rrt(MetricKind::Diffusion);
@@ -183,6 +220,10 @@ pub fn exported_mission<C: Clock>(
         }
     }
     let mut world_calls = 0u32;
+    let door = door_cells(&grid, start, first_goal);
+    let door_centre = start.lerp(first_goal, 0.5);
+    // Calls since the door closed (`None`: open).
+    let (mut closed_for, mut door_done, mut door_cells_marked) = (None::<u32>, false, 0u32);
     let protocol = Protocol {
         max_calls: MAX_CALLS,
         ..Protocol::default()
@@ -215,6 +256,22 @@ pub fn exported_mission<C: Clock>(
                 trail = bytes
                     .iter()
                     .fold(trail, |h, &b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
+                // The door closes near the agent and opens DOOR_CALLS calls later.
+                if DOOR && !door_done {
+                    match closed_for {
+                        None if agent.dist(door_centre) < 15.0 => {
+                            door_cells_marked = p.set_cells(door.0, door.1, true).unwrap_or(0);
+                            closed_for = Some(0);
+                        }
+                        Some(n) if n >= DOOR_CALLS => {
+                            let _ = p.set_cells(door.0, door.1, false);
+                            closed_for = None;
+                            door_done = true;
+                        }
+                        Some(n) => closed_for = Some(n + 1),
+                        None => {}
+                    }
+                }
                 // The walkers move on and are reported for the next call.
                 if WALKERS > 0 {
                     world_calls += 1;
@@ -285,6 +342,18 @@ pub fn exported_mission<C: Clock>(
             r.nodes_at_goal.unwrap_or(0),
             nodes,
             r.calls
+        );
+    }
+    if DOOR {
+        hprintln!(
+            "a door of {} cells closed across the way for {} calls ({})",
+            door_cells_marked,
+            DOOR_CALLS,
+            if door_done {
+                "and opened again"
+            } else {
+                "still closed at the end"
+            }
         );
     }
     if WALKERS > 0 {

@@ -215,7 +215,8 @@ enum Command {
     /// the shape of the paper's Section 5: Fig. 6 (original vs modified for each scheme), box
     /// plots per planner, nodes at goal, Table 3 (map processing), the paper's claims.
     Report {
-        /// The results folder (experiment.json and runs.csv).
+        /// The results folder (experiment.json and runs.csv, or a `moving` folder:
+        /// moving.json and runs.csv).
         #[arg(long)]
         results: PathBuf,
         /// The Markdown file to write; the charts go to a folder beside it of the same name
@@ -676,6 +677,15 @@ fn main() -> Result<()> {
                 }
                 None => None,
             };
+            if results.join(host_sim::moving::SETTINGS_FILE).exists() {
+                let charts = host_sim::moving::report(&results, &out, &command)?;
+                println!(
+                    "wrote {} and {} chart (SVG and PNG) of a moving run",
+                    out.display(),
+                    charts.len()
+                );
+                return Ok(());
+            }
             let r = host_sim::report::report(&results, &out, &command, notes.as_deref())?;
             println!(
                 "wrote {} and {} charts (SVG and PNG) in {}",

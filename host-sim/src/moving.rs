@@ -7,9 +7,10 @@
 //!   their crossing when the agent passes;
 //! - `head-on`: two people walk the route backwards at 1.0-1.5 m/s, from 15-25 m and 35-45 m
 //!   ahead of the start, towards the agent, turning at its corners;
-//! - `door`: a door across the route (at its narrowest passage between 25 % and 75 % of its
-//!   length, a band 1.5 cells thick across the free width) closes when the agent comes within
-//!   4 m and opens [`DOOR_CLOSED_S`] later;
+//! - `door`: a door across the route (at its narrowest doorway between 25 % and 75 % of its
+//!   length, walls within 10 m on both sides, whose closing leaves a way round; a band 1.5
+//!   cells thick from wall to wall) closes when the agent comes within 4 m and opens
+//!   [`DOOR_CLOSED_S`] later;
 //! - `closed-door`: the same door, closed from the start (what not rebaking the table costs).
 //!
 //! Treatments (the planner, the agent and the walkers are the same; only the reports differ):
@@ -49,7 +50,7 @@ use plotters::style::RGBColor;
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
 use crate::draw::{Animation, Painter};
@@ -73,7 +74,7 @@ pub const MOTION: Motion = Motion {
 const SUBSTEPS: u32 = 10;
 
 /// A scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Kind {
     /// People crossing the route.
@@ -87,7 +88,7 @@ pub enum Kind {
 }
 
 /// How the walkers are reported.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Treatment {
     /// Still circles, no motion stated.
@@ -219,7 +220,7 @@ fn locate(points: &[Point], s: f32) -> Option<(Point, Point, f32, f32)> {
 }
 
 /// What one run measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MovingRow {
     /// Scene.
     pub kind: Kind,
@@ -289,11 +290,12 @@ fn unit(rng: &mut XorShiftRng) -> f32 {
     (rng.next_u32() >> 8) as f32 / 16_777_216.0
 }
 
-/// The free width either side of `x` along `n` and `-n`, at most 6 m each (0.1 m steps).
-fn free_width(grid: &bi_am_rrt::OccupancyGrid<'_>, x: Point, n: Point) -> (f32, f32) {
+/// The free width either side of `x` along `n` and `-n`, at most `cap` metres each (0.1 m
+/// steps).
+fn free_width(grid: &bi_am_rrt::OccupancyGrid<'_>, x: Point, n: Point, cap: f32) -> (f32, f32) {
     let reach = |sign: f32| {
         let mut r = 0.0f32;
-        while r < 6.0 {
+        while r < cap {
             let q = x + n * (sign * (r + 0.1));
             if !grid.point_free(q) {
                 break;
@@ -307,11 +309,14 @@ fn free_width(grid: &bi_am_rrt::OccupancyGrid<'_>, x: Point, n: Point) -> (f32, 
 
 /// Seconds the `door` scene's door stays closed.
 pub const DOOR_CLOSED_S: f32 = 20.0;
+/// A doorway has walls within this many metres on both sides of the route.
+const DOOR_REACH: f32 = 10.0;
 /// The `door` scene's door closes when the agent comes this near (metres).
 const DOOR_NEAR: f32 = 4.0;
 
-/// A door across the route: at its narrowest passage between 25 % and 75 % of its length, a
-/// band of cells 1.5 cells (at least 0.3 m) thick across the free width.
+/// A door across the route: at its narrowest doorway between 25 % and 75 % of its length (walls
+/// within [`DOOR_REACH`] on both sides) whose closing leaves a way round, a band of cells 1.5 cells (at
+/// least 0.3 m) thick from wall to wall.
 #[derive(Clone, Debug)]
 struct Door {
     /// The free cells it closes.
@@ -322,20 +327,38 @@ struct Door {
     ends: (Point, Point),
 }
 
-fn door(grid: &bi_am_rrt::OccupancyGrid<'_>, route: &[Point]) -> Result<Door> {
+fn door(map: &crate::maps::OwnedGrid, route: &[Point]) -> Result<Door> {
+    let grid = map.grid();
     let total: f32 = route.windows(2).map(|w| w[0].dist(w[1])).sum();
-    let mut best: Option<(f32, Point, Point, f32, f32)> = None;
+    // Doorways: walls within DOOR_REACH on both sides, narrowest first.
+    let mut candidates = Vec::new();
     let mut s = 0.25 * total;
     while s <= 0.75 * total {
         let (x, d) = along(route, s);
         let n = Point::new(-d.y, d.x);
-        let (a, b) = free_width(grid, x, n);
-        if a + b >= 0.6 && best.is_none_or(|(w, ..)| a + b < w) {
-            best = Some((a + b, x, d, a, b));
+        let (a, b) = free_width(&grid, x, n, DOOR_REACH);
+        if a + b >= 0.6 && a < DOOR_REACH && b < DOOR_REACH {
+            candidates.push((a + b, x, d, a, b));
         }
         s += 0.25;
     }
-    let (_, x, d, a, b) = best.context("no passage on the route for a door")?;
+    candidates.sort_by(|p, q| p.0.total_cmp(&q.0));
+    let (start, goal) = (route[0], route[route.len() - 1]);
+    for &(_, x, d, a, b) in &candidates {
+        let door = door_at(&grid, x, d, a, b);
+        // Closed, it must close the way it stands in and leave another one.
+        let shut = closed_grid(map, &door);
+        if connected(&shut.grid(), start, goal) && !door.cells.is_empty() {
+            return Ok(door);
+        }
+    }
+    Err(anyhow!(
+        "no doorway on the route (walls within {DOOR_REACH} m either side) that leaves a way round"
+    ))
+}
+
+/// The door across the passage at `x` (route direction `d`, free `a` and `b` either side).
+fn door_at(grid: &bi_am_rrt::OccupancyGrid<'_>, x: Point, d: Point, a: f32, b: f32) -> Door {
     let n = Point::new(-d.y, d.x);
     let cell = grid.cell_size();
     let half = (0.75 * cell).max(0.15);
@@ -355,11 +378,44 @@ fn door(grid: &bi_am_rrt::OccupancyGrid<'_>, route: &[Point]) -> Result<Door> {
             }
         }
     }
-    Ok(Door {
+    Door {
         cells,
         centre: x,
         ends: (x + n * lo, x + n * hi),
-    })
+    }
+}
+
+/// Whether the free cells of `a` and `b` are joined by free cells sharing sides (the
+/// planner's rule blocks a slip through a corner).
+fn connected(grid: &bi_am_rrt::OccupancyGrid<'_>, a: Point, b: Point) -> bool {
+    let (Some(from), Some(to)) = (grid.cell_of(a), grid.cell_of(b)) else {
+        return false;
+    };
+    let w = grid.cols() as usize;
+    let mut seen = vec![false; w * grid.rows() as usize];
+    let mut stack = vec![from];
+    seen[from.1 as usize * w + from.0 as usize] = true;
+    while let Some((c, r)) = stack.pop() {
+        if (c, r) == to {
+            return true;
+        }
+        let next = [
+            (c.wrapping_sub(1), r),
+            (c + 1, r),
+            (c, r.wrapping_sub(1)),
+            (c, r + 1),
+        ];
+        for (nc, nr) in next {
+            if nc < grid.cols() && nr < grid.rows() && !grid.is_occupied(nc, nr) {
+                let i = nr as usize * w + nc as usize;
+                if !seen[i] {
+                    seen[i] = true;
+                    stack.push((nc, nr));
+                }
+            }
+        }
+    }
+    false
 }
 
 /// The grid with the door closed.
@@ -397,7 +453,7 @@ fn walkers(prep: &Prepared, route: &[Point], kind: Kind, seed: u64) -> Vec<Walke
                 let s = total * (0.15 + 0.7 * (i as f32 + unit(&mut rng)) / 5.0);
                 let (x, d) = along(route, s);
                 let n = Point::new(-d.y, d.x);
-                let (a, b) = free_width(&grid, x, n);
+                let (a, b) = free_width(&grid, x, n, 6.0);
                 if a + b < 1.0 {
                     continue;
                 }
@@ -452,7 +508,7 @@ fn walkers(prep: &Prepared, route: &[Point], kind: Kind, seed: u64) -> Vec<Walke
 }
 
 /// What a treatment submits for a walker at time `t`.
-fn report(w: &Walker, t: f32, treatment: Treatment) -> Moving {
+fn reported(w: &Walker, t: f32, treatment: Treatment) -> Moving {
     let (pos, vel, turn) = w.at(t);
     let c = Circle::new(pos, w.radius);
     match treatment {
@@ -496,7 +552,7 @@ fn one(
     with_planner(prep, cfg, seed, |p| {
         let ids: Vec<ObstacleId> = people
             .iter()
-            .map(|w| p.add_moving_obstacle(report(w, 0.0, treatment)))
+            .map(|w| p.add_moving_obstacle(reported(w, 0.0, treatment)))
             .collect::<std::result::Result<_, _>>()
             .map_err(|e| anyhow!("{e}"))?;
         p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
@@ -541,7 +597,7 @@ fn one(
         for call in 0..max_calls {
             let t = call as f32 * PERIOD;
             for (w, &id) in people.iter().zip(&ids) {
-                p.update_obstacle(id, report(w, t, treatment))
+                p.update_obstacle(id, reported(w, t, treatment))
                     .map_err(|e| anyhow!("{e}"))?;
             }
             let pr = p.plan(&clock, agent).map_err(|e| anyhow!("{e}"))?;
@@ -807,7 +863,7 @@ pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
         .iter()
         .any(|k| matches!(k, Kind::Door | Kind::ClosedDoor));
     let door = doors
-        .then(|| door(&prep.scenario.map.grid(), &route))
+        .then(|| door(&prep.scenario.map, &route))
         .transpose()?;
     // The scenario with the door closed in its map: its table is baked here, once.
     let closed = match &door {
@@ -869,28 +925,79 @@ pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
         w.serialize(r)?;
     }
     w.flush()?;
-    let summary = summarise(&prep.scenario.name, &rows, args);
+    let settings = MovingSettings {
+        map: prep.scenario.name.clone(),
+        kinds: args.kinds.clone(),
+        seeds: args.seeds,
+        t_exp_ms: args.t_exp.as_secs_f64() * 1e3,
+    };
+    std::fs::write(
+        args.out.join(SETTINGS_FILE),
+        serde_json::to_string_pretty(&settings)?,
+    )?;
+    let summary = summarise(&settings, &rows);
     std::fs::write(args.out.join("summary.md"), &summary)?;
     chart(&rows, &args.kinds, &args.out.join("moving"))?;
     print!("{summary}");
     Ok(rows)
 }
 
+/// The settings file `moving` writes beside its runs.csv (`report` recognises the folder by it).
+pub const SETTINGS_FILE: &str = "moving.json";
+
+/// What a `moving` results folder was run with.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MovingSettings {
+    /// The scenario.
+    pub map: String,
+    /// Scenes run.
+    pub kinds: Vec<Kind>,
+    /// Seeds per scene and treatment.
+    pub seeds: u64,
+    /// Virtual planning budget per call, ms.
+    pub t_exp_ms: f64,
+}
+
+/// `report` on a `moving` results folder: the summary table and the chart (collisions,
+/// waiting time, travelled / optimal per scene and treatment) rebuilt from its runs.csv, into
+/// `out` (a `.md` file) and a folder beside it of the same name. Returns the chart stems.
+pub fn report(results: &Path, out: &Path, command: &str) -> Result<Vec<PathBuf>> {
+    let settings: MovingSettings = serde_json::from_str(
+        &std::fs::read_to_string(results.join(SETTINGS_FILE))
+            .with_context(|| format!("{}", results.join(SETTINGS_FILE).display()))?,
+    )?;
+    let mut rd = csv::Reader::from_path(results.join("runs.csv"))
+        .with_context(|| format!("{}", results.join("runs.csv").display()))?;
+    let rows: Vec<MovingRow> = rd.deserialize().collect::<std::result::Result<_, _>>()?;
+    let stem = out.with_extension("");
+    std::fs::create_dir_all(&stem).with_context(|| format!("{}", stem.display()))?;
+    let chart_stem = stem.join("moving");
+    chart(&rows, &settings.kinds, &chart_stem)?;
+    let rel = stem
+        .file_name()
+        .map_or("report".into(), |n| n.to_string_lossy().into_owned());
+    let md = format!(
+        "{}\n![collisions, waiting and travelled / optimal]({rel}/moving.svg)\n\nRegenerate: `{command}`\n",
+        summarise(&settings, &rows)
+    );
+    std::fs::write(out, md).with_context(|| format!("{}", out.display()))?;
+    Ok(vec![chart_stem])
+}
+
 /// Per scene and treatment: runs, arrivals, collisions by kind, waiting, travelled / optimal.
-fn summarise(map: &str, rows: &[MovingRow], args: &MovingArgs) -> String {
+fn summarise(settings: &MovingSettings, rows: &[MovingRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# Moving obstacles on {map}: {} seeds per scene and treatment, {} ms (virtual) per call\n",
-        args.seeds,
-        args.t_exp.as_secs_f64() * 1e3
+        "# Moving obstacles on {}: {} seeds per scene and treatment, {} ms (virtual) per call\n",
+        settings.map, settings.seeds, settings.t_exp_ms
     );
     let _ = writeln!(
         s,
         "| scene | treatment | runs | reached | collisions: moved into | ran into | runs with a collision | waiting s (median) | time s (median) | travelled / optimal (median) | evading calls | cornered calls | most work per call |"
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for &kind in &args.kinds {
+    for &kind in &settings.kinds {
         for &treatment in kind.treatments() {
             let mine: Vec<&MovingRow> = rows
                 .iter()

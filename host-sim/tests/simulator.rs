@@ -1228,3 +1228,61 @@ fn leg_ratios_take_the_median_and_the_worst_leg() {
     assert!(worst.is_infinite());
     assert_eq!(leg_ratios(&ours, &[]), None);
 }
+
+/// Issue 27: the door scenes on a hall with two doorways. A door on the route closes as the agent
+/// nears it and opens 20 s later (still circles or live cells), or is closed from the start
+/// (live cells with the table as baked, or the door in the map with a rebaked table): every
+/// run arrives, no run with live cells or the rebaked map drives into the door, and `report`
+/// rebuilds the summary and the chart from the folder.
+#[test]
+fn door_scenes_run_and_report() {
+    use host_sim::moving::{Kind, MovingArgs, Treatment, moving, report};
+    let dir = tempfile::tempdir().unwrap();
+    // 40 m x 30 m, a wall at x = 20 m with doorways at y 5-10 m (on the way) and 20-25 m.
+    let map = maps::OwnedGrid::from_fn(40, 30, 1.0, |c, r| {
+        c == 0
+            || r == 0
+            || c == 39
+            || r == 29
+            || (c == 20 && !(5..10).contains(&r) && !(20..25).contains(&r))
+    })
+    .unwrap();
+    let scenario = maps::Scenario {
+        name: "two-doors".into(),
+        map,
+        source: "test".into(),
+        start: bi_am_rrt::Point::new(5.5, 7.5),
+        goals: vec![bi_am_rrt::Point::new(34.5, 7.5)],
+        sigma: 18.0,
+        ros_origin: None,
+        paper_lengths: false,
+    };
+    let prep = host_sim::sim::Prepared::new(scenario);
+    let rows = moving(
+        &prep,
+        &MovingArgs {
+            kinds: vec![Kind::Door, Kind::ClosedDoor],
+            seeds: 1,
+            t_exp: std::time::Duration::from_millis(2),
+            out: dir.path().to_path_buf(),
+            animate: None,
+        },
+    )
+    .unwrap();
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        assert!(r.reached, "{r:?}");
+        if r.treatment != Treatment::Static {
+            assert_eq!(r.moved_into + r.ran_into, 0, "{r:?}");
+        }
+        if r.kind == Kind::ClosedDoor {
+            assert!(r.travelled_ratio >= 0.999, "{r:?}");
+        }
+    }
+    let md = dir.path().join("report.md");
+    let charts = report(dir.path(), &md, "host-sim report").unwrap();
+    assert_eq!(charts.len(), 1);
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert!(text.contains("| closed-door | rebaked | 1 | 1 |"), "{text}");
+    assert!(dir.path().join("report/moving.svg").exists());
+}
