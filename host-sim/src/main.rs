@@ -593,6 +593,7 @@ fn main() -> Result<()> {
                     t_exp: std::time::Duration::from_millis(t_exp_ms),
                     out,
                     animate,
+                    route_calls: host_sim::moving::ROUTE_CALLS,
                 },
             )?;
             Ok(())

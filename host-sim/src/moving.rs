@@ -260,21 +260,27 @@ pub struct MovingArgs {
     pub out: PathBuf,
     /// GIF of seed 0 (`predicted`), one frame every N calls.
     pub animate: Option<u32>,
+    /// Planning calls (of the default 150 ms) the route gets to settle before the runs
+    /// ([`ROUTE_CALLS`] from the command line).
+    pub route_calls: u32,
 }
 
+/// Calls the route gets to settle: 400 x 150 ms of planning.
+pub const ROUTE_CALLS: u32 = 400;
+
 /// The route: the planner's path to goal 1 after it has had time to settle (no walkers).
-fn route(prep: &Prepared, cfg: Config) -> Result<Vec<Point>> {
+fn route(prep: &Prepared, cfg: Config, calls: u32) -> Result<Vec<Point>> {
     let goal = *prep.scenario.goals.first().context("no goal")?;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
     with_planner(prep, cfg, 0, |p| {
         p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
-        for _ in 0..400 {
+        for _ in 0..calls {
             p.grow(&clock);
         }
         let mut buf = vec![Point::ZERO; p.tree().len().max(2)];
         let info = p.path(&mut buf).map_err(|e| anyhow!("{e}"))?;
         if !info.to_goal {
-            return Err(anyhow!("no path to goal 1 after 400 calls"));
+            return Err(anyhow!("no path to goal 1 after {calls} calls"));
         }
         buf.truncate(info.len);
         Ok(buf)
@@ -849,7 +855,7 @@ fn door_one(
 pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}", args.out.display()))?;
     let base = Config::default();
-    let route = route(prep, base)?;
+    let route = route(prep, base, args.route_calls)?;
     let mut jobs = Vec::new();
     for &kind in &args.kinds {
         for &treatment in kind.treatments() {

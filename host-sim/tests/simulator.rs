@@ -1266,6 +1266,7 @@ fn door_scenes_run_and_report() {
             t_exp: std::time::Duration::from_millis(2),
             out: dir.path().to_path_buf(),
             animate: None,
+            route_calls: 20,
         },
     )
     .unwrap();
