@@ -236,6 +236,9 @@ pub struct Stats {
     pub reverse_expansions: u64,
     /// Whether the goal joined through a meet of the two trees.
     pub met: bool,
+    /// Tree edges re-tested against the live cells because cells near them changed (both
+    /// trees, since the goal was set).
+    pub retested: u64,
     /// The joining segment of that meet: the forward node and the reverse node it grafted
     /// (the paper's Fig. 7b).
     pub meet: Option<[Point; 2]>,
@@ -533,6 +536,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             Point::new(c0 - 1.0, r0 - 1.0),
             Point::new(c1 + 2.0, r1 + 2.0),
         );
+        let mut retested = 0u64;
         for store in [&mut *self.fwd, &mut *self.rev] {
             meter.charge(units(store.tree.len()));
             let changed = store.tree.rewall_edges(|a, b| {
@@ -547,6 +551,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 near.then(|| {
                     // About the cells the segment crosses.
                     meter.charge(sat_u32((p.x - q.x).abs() + (p.y - q.y).abs() + 2.0));
+                    retested = retested.saturating_add(1);
                     !cells.segment_free(a, b)
                 })
             });
@@ -554,6 +559,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 store.restart_sweeps();
             }
         }
+        self.stats.retested = self.stats.retested.saturating_add(retested);
     }
 
     /// Whether an agent at `p` stands inside a dynamic obstacle or a marked cell: any motion
@@ -654,7 +660,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// rewires on the path; a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). With
     /// obstacle updates submitted since the last call, the call starts by re-flagging both
-    /// trees (`2 N (K + 1)` units, before the expansions: it spends the budget), and with
+    /// trees (`2 N (K + 1)` units, before the expansions: it spends the budget); with live
+    /// cells edited since the last call, by re-testing the edges near them (a unit per node
+    /// of both trees and, per edge near the changed cells, about the cells it crosses:
+    /// [`Stats::retested`] counts them), likewise before the expansions; and with
     /// obstacles present the waypoint rule (module [`crate::motion`]) ends the call with at
     /// most about 65 tests of the `K` obstacles and as many grid segments, for which the
     /// expansions leave [`crate::motion::RULE_UNITS`] units per obstacle. Measured
