@@ -679,7 +679,7 @@ pub(crate) fn discs_meet(items: &[(ObstacleId, Moving)], a: Point, b: Point) -> 
 /// bits flip the borrowed grid's cells, so the live map is `grid XOR overlay`. A lidar marks a
 /// free cell occupied or clears an occupied one ([`Map::set_cells`]); the static grid, and the
 /// diffusion table baked from it, stay as they are. Each edit grows the box of cells changed
-/// since the planner last repaired its trees ([`Map::take_changed`]).
+/// since the planner last repaired its trees (the planner takes it at its next call).
 #[derive(Debug)]
 pub struct Overlay<'a> {
     bits: &'a mut [u8],
