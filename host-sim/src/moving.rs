@@ -17,7 +17,7 @@
 //! - `static`: the walkers re-submitted every call as still circles, nothing stated about
 //!   motion ([`bi_am_rrt::Motion::NONE`]): the paper's planner with today's interface;
 //! - `predicted`: their velocity as a tracker reports it, trusted for ever (a walker turns
-//!   without notice), with the motion stated ([`motion`]);
+//!   without notice), with the motion stated ([`bi_am_rrt::motion`]);
 //! - `oracle`: the same, each prediction trusted exactly until the walker's next turn (it knows
 //!   when its prediction ends; past it the disc grows at the stated top speed).
 //!
