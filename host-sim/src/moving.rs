@@ -1039,28 +1039,38 @@ fn summarise(settings: &MovingSettings, rows: &[MovingRow]) -> String {
 
 /// Collisions, waiting time and travelled / optimal per scene, one bar per treatment.
 fn chart(rows: &[MovingRow], kinds: &[Kind], stem: &Path) -> Result<()> {
-    let colours = [
-        RGBColor(150, 150, 150),
-        RGBColor(40, 110, 200),
-        RGBColor(230, 140, 20),
-    ];
-    let series: Vec<(RGBColor, String)> = Treatment::ALL
+    // The treatments of the scenes run, each in its own colour.
+    let colour = |t: Treatment| match t {
+        Treatment::Static => RGBColor(150, 150, 150),
+        Treatment::Predicted => RGBColor(40, 110, 200),
+        Treatment::Oracle => RGBColor(230, 140, 20),
+        Treatment::Live => RGBColor(40, 160, 90),
+        Treatment::Rebaked => RGBColor(140, 80, 170),
+    };
+    let shown: Vec<Treatment> = Treatment::ALL
+        .into_iter()
+        .filter(|t| kinds.iter().any(|k| k.treatments().contains(t)))
+        .collect();
+    let series: Vec<(RGBColor, String)> = shown
         .iter()
-        .zip(colours)
-        .map(|(t, c)| (c, t.name().to_string()))
+        .map(|&t| (colour(t), t.name().to_string()))
         .collect();
     let groups: Vec<String> = kinds.iter().map(|k| k.name().to_string()).collect();
-    let panel = |title: &str, y: &str, f: &dyn Fn(&[&MovingRow]) -> Option<f64>| BarPanel {
+    let panel = |title: &str,
+                 y: &str,
+                 from_zero: bool,
+                 f: &dyn Fn(&[&MovingRow]) -> Option<f64>| BarPanel {
         title: title.into(),
         y_label: y.into(),
         log: false,
         groups: groups.clone(),
         series: series.clone(),
         reference: None,
+        from_zero,
         values: kinds
             .iter()
             .map(|&k| {
-                Treatment::ALL
+                shown
                     .iter()
                     .map(|&t| {
                         let mine: Vec<&MovingRow> = rows
@@ -1086,11 +1096,13 @@ fn chart(rows: &[MovingRow], kinds: &[Kind], stem: &Path) -> Result<()> {
         title: "Moving obstacles and live cells, by treatment".into(),
         cols: 3,
         panels: vec![
-            panel("Collisions (all runs)", "contacts", &|m| {
+            panel("Collisions (all runs)", "contacts", true, &|m| {
                 Some(m.iter().map(|r| (r.moved_into + r.ran_into) as f64).sum())
             }),
-            panel("Waiting time (median)", "s", &|m| med(m, |r| r.waiting_s)),
-            panel("Travelled / optimal (median)", "ratio", &|m| {
+            panel("Waiting time (median)", "s", true, &|m| {
+                med(m, |r| r.waiting_s)
+            }),
+            panel("Travelled / optimal (median)", "ratio", false, &|m| {
                 med(m, |r| r.travelled_ratio)
             }),
         ],

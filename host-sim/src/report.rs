@@ -118,6 +118,9 @@ pub(crate) struct BarPanel {
     pub(crate) series: Vec<(RGBColor, String)>,
     /// A horizontal reference line and its legend entry (e.g. the exact optimum).
     pub(crate) reference: Option<(f64, String)>,
+    /// Linear bars from zero (counts, seconds) instead of from just below the smallest value
+    /// (lengths, where a change of 1 % must show).
+    pub(crate) from_zero: bool,
     /// `values[group][series]`.
     pub(crate) values: Vec<Vec<Option<f64>>>,
     /// Text above each group (e.g. the change in percent).
@@ -164,8 +167,10 @@ impl BarPanel {
         let (lo, hi) = if self.log {
             (tf(min).floor(), tf(max).ceil() + 0.6)
         } else {
-            let lo = min * 0.97;
-            (lo, max + 0.45 * (max - lo))
+            let lo = if self.from_zero { 0.0 } else { min * 0.97 };
+            let hi = max + 0.45 * (max - lo);
+            // All values equal (all zero collisions): still a scale.
+            (lo, if hi > lo { hi } else { lo + 1.0 })
         };
         let n = self.groups.len();
         let mut chart = ok(ChartBuilder::on(area)
@@ -723,6 +728,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                     reference: optimum
                         .filter(|_| !log)
                         .map(|o| (o, format!("exact optimum {o:.2} m"))),
+                    from_zero: false,
                     values,
                     notes,
                 });
