@@ -173,36 +173,27 @@ impl<'a> OccupancyGrid<'a> {
     /// the cells of the degenerate segment `p-p` (one, or up to four near a cell's edge), tested
     /// without the segment traversal (the steering tests a point per candidate).
     pub fn point_free(&self, p: Point) -> bool {
-        const M: f32 = CONTACT_MARGIN;
-        if !self.contains(p) {
-            return false;
-        }
-        let (x, y) = (p.x * self.inv_cell, p.y * self.inv_cell);
-        let (c0, c1) = (axis_index(x - M, self.width), axis_index(x + M, self.width));
-        let (r0, r1) = (
-            axis_index(y - M, self.height),
-            axis_index(y + M, self.height),
-        );
-        (r0..=r1).all(|row| self.span_free(row, c0, c1))
+        self.point_spans_free(p, |row, c0, c1| self.span_free(row, c0, c1))
     }
 
     /// Whether segment `a-b` lies in the map and touches no occupied cell (module docs).
     pub fn segment_free(&self, a: Point, b: Point) -> bool {
-        if !self.contains(a) || !self.contains(b) {
-            return false;
-        }
-        self.for_each_span(a, b, |row, c0, c1| {
-            if self.span_free(row, c0, c1) {
-                ControlFlow::Continue(())
-            } else {
-                ControlFlow::Break(())
-            }
-        })
-        .is_continue()
+        self.segment_spans_free(a, b, |row, c0, c1| self.span_free(row, c0, c1))
     }
 
     /// [`Self::point_free`] with the cells of `flip` (same layout) flipped ([`Overlay`]).
     fn point_free_xor(&self, p: Point, flip: &[u8]) -> bool {
+        self.point_spans_free(p, |row, c0, c1| self.span_free_xor(row, c0, c1, flip))
+    }
+
+    /// [`Self::segment_free`] with the cells of `flip` (same layout) flipped ([`Overlay`]).
+    fn segment_free_xor(&self, a: Point, b: Point, flip: &[u8]) -> bool {
+        self.segment_spans_free(a, b, |row, c0, c1| self.span_free_xor(row, c0, c1, flip))
+    }
+
+    /// The point test with `free(row, c0, c1)` as the test of a run of cells.
+    #[inline(always)]
+    fn point_spans_free(&self, p: Point, free: impl Fn(u16, u16, u16) -> bool) -> bool {
         const M: f32 = CONTACT_MARGIN;
         if !self.contains(p) {
             return false;
@@ -213,16 +204,17 @@ impl<'a> OccupancyGrid<'a> {
             axis_index(y - M, self.height),
             axis_index(y + M, self.height),
         );
-        (r0..=r1).all(|row| self.span_free_xor(row, c0, c1, flip))
+        (r0..=r1).all(|row| free(row, c0, c1))
     }
 
-    /// [`Self::segment_free`] with the cells of `flip` (same layout) flipped ([`Overlay`]).
-    fn segment_free_xor(&self, a: Point, b: Point, flip: &[u8]) -> bool {
+    /// The segment test with `free(row, c0, c1)` as the test of a run of cells.
+    #[inline(always)]
+    fn segment_spans_free(&self, a: Point, b: Point, free: impl Fn(u16, u16, u16) -> bool) -> bool {
         if !self.contains(a) || !self.contains(b) {
             return false;
         }
         self.for_each_span(a, b, |row, c0, c1| {
-            if self.span_free_xor(row, c0, c1, flip) {
+            if free(row, c0, c1) {
                 ControlFlow::Continue(())
             } else {
                 ControlFlow::Break(())

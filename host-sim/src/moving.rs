@@ -248,6 +248,42 @@ pub struct MovingRow {
     pub max_work: u64,
 }
 
+impl MovingRow {
+    /// The row of a run that has not started.
+    fn new(kind: Kind, treatment: Treatment, seed: u64) -> Self {
+        Self {
+            kind,
+            treatment,
+            seed,
+            reached: false,
+            time_s: 0.0,
+            waiting_s: 0.0,
+            moved_into: 0,
+            ran_into: 0,
+            evading_calls: 0,
+            cornered_calls: 0,
+            travelled_ratio: f64::NAN,
+            max_work: 0,
+        }
+    }
+}
+
+/// The GIF of a pictured run with `--animate` (`KIND.gif`), drawn by `small`.
+fn animation<'a, 'g>(
+    small: Option<&'a Painter<'g>>,
+    pictures: Option<(&Path, Option<u32>)>,
+    kind: Kind,
+) -> Result<Option<Animation<'a, 'g>>> {
+    match (pictures, small) {
+        (Some((dir, Some(_))), Some(small)) => Ok(Some(Animation::new(
+            small,
+            &dir.join(format!("{}.gif", kind.name())),
+            100,
+        )?)),
+        _ => Ok(None),
+    }
+}
+
 /// Arguments of `moving`.
 pub struct MovingArgs {
     /// Scenes to run.
@@ -568,14 +604,7 @@ fn one(
         let painter = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 900));
         // The GIF is smaller and shows no tree (the frames then compress well).
         let small = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 560));
-        let mut gif = match (pictures, small.as_ref()) {
-            (Some((dir, Some(_))), Some(small)) => Some(Animation::new(
-                small,
-                &dir.join(format!("{}.gif", kind.name())),
-                100,
-            )?),
-            _ => None,
-        };
+        let mut gif = animation(small.as_ref(), pictures, kind)?;
         let title = |call: u32| {
             format!(
                 "{} {}, {} walkers, seed {seed}, t = {:.1} s",
@@ -585,20 +614,7 @@ fn one(
                 call as f32 * PERIOD
             )
         };
-        let mut row = MovingRow {
-            kind,
-            treatment,
-            seed,
-            reached: false,
-            time_s: 0.0,
-            waiting_s: 0.0,
-            moved_into: 0,
-            ran_into: 0,
-            evading_calls: 0,
-            cornered_calls: 0,
-            travelled_ratio: f64::NAN,
-            max_work: 0,
-        };
+        let mut row = MovingRow::new(kind, treatment, seed);
         let mut travelled = 0.0f64;
         for call in 0..max_calls {
             let t = call as f32 * PERIOD;
@@ -704,20 +720,7 @@ fn door_one(
     .unwrap_or(f64::NAN);
     let body = |p: &mut SimPlanner<'_, '_>| -> Result<MovingRow> {
         let goal = prep.scenario.goals[0];
-        let mut row = MovingRow {
-            kind,
-            treatment,
-            seed,
-            reached: false,
-            time_s: 0.0,
-            waiting_s: 0.0,
-            moved_into: 0,
-            ran_into: 0,
-            evading_calls: 0,
-            cornered_calls: 0,
-            travelled_ratio: f64::NAN,
-            max_work: 0,
-        };
+        let mut row = MovingRow::new(kind, treatment, seed);
         let set = |p: &mut SimPlanner<'_, '_>, occupied: bool| -> Result<()> {
             for &c in &door.cells {
                 p.set_cells(c, c, occupied).map_err(|e| anyhow!("{e}"))?;
@@ -737,14 +740,7 @@ fn door_one(
         let mut opened = false;
         let mut touching = false;
         let small = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 560));
-        let mut gif = match (pictures, small.as_ref()) {
-            (Some((dir, Some(_))), Some(small)) => Some(Animation::new(
-                small,
-                &dir.join(format!("{}.gif", kind.name())),
-                100,
-            )?),
-            _ => None,
-        };
+        let mut gif = animation(small.as_ref(), pictures, kind)?;
         let shown = |s: &mut crate::draw::Scene, closed: bool| {
             if closed {
                 let r = 0.6 * prep.scenario.map.grid().cell_size();

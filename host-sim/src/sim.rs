@@ -183,13 +183,24 @@ pub fn with_planner_in<const N: usize, T>(
     start: bi_am_rrt::Point,
     f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
 ) -> Result<T> {
+    let map = Map::new(prep.scenario.map.grid());
+    f(&mut planner_on(storage, prep, map, cfg, seed, start)?)
+}
+
+/// The planner of `prep` on `map` (the scenario's grid, with or without an overlay).
+fn planner_on<'s, 'm, const N: usize>(
+    storage: &'s mut Storage<N, BUCKETS>,
+    prep: &'m Prepared,
+    map: Map<'m, OBSTACLES>,
+    cfg: Config,
+    seed: u64,
+    start: bi_am_rrt::Point,
+) -> Result<SizedPlanner<'s, 'm, N>> {
     prep.scenario.validate()?;
     let metric = prep.metric(cfg.metric)?;
-    let map = Map::new(prep.scenario.map.grid());
     let rng = XorShiftRng::seed_from_u64(seed);
-    let mut planner = Planner::new(storage, map, metric, rng, prep.config(cfg), start)
-        .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
-    f(&mut planner)
+    Planner::new(storage, map, metric, rng, prep.config(cfg), start)
+        .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))
 }
 
 /// [`with_planner`] on a map with a live overlay ([`bi_am_rrt::map::Overlay`]): cells the run
@@ -200,25 +211,14 @@ pub fn with_live_planner<T>(
     seed: u64,
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
-    prep.scenario.validate()?;
     let grid = prep.scenario.map.grid();
     let mut overlay = vec![0u8; bi_am_rrt::OccupancyGrid::bytes_needed(grid.cols(), grid.rows())];
     let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
-    let metric = prep.metric(cfg.metric)?;
     let map = Map::new(grid)
         .with_overlay(&mut overlay)
         .map_err(|e| anyhow!("overlay: {e}"))?;
-    let rng = XorShiftRng::seed_from_u64(seed);
-    let mut planner = Planner::new(
-        &mut storage,
-        map,
-        metric,
-        rng,
-        prep.config(cfg),
-        prep.scenario.start,
-    )
-    .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
-    f(&mut planner)
+    let start = prep.scenario.start;
+    f(&mut planner_on(&mut storage, prep, map, cfg, seed, start)?)
 }
 
 /// One goal of a run.
