@@ -7,7 +7,7 @@
 //!   flash). The host simulator bakes the tables (`host-sim bake`). For `i16` tables the sum
 //!   of squared differences is computed exactly in integers and rounded to `f32` once (the
 //!   same bits on every target, and integer work only on a core without an FPU: issue 26
-//!   measured +18-21 % expansions per call on the Cortex-M0+).
+//!   measured +17-21 % expansions per call on the Cortex-M0+).
 //! - The geodesic metric `d_G` (graph shortest paths) implements the same trait in `host-sim`,
 //!   and any user type can too.
 //!
@@ -309,7 +309,7 @@ impl TableHeader {
         let coords_at = nibbles_at.checked_add(nibble_bytes)?;
         Some(PieceParts {
             block: b,
-            inv_block: (1u64 << 32).div_ceil(u64::from(b)),
+            inv_block: PieceParts::reciprocal(b),
             block_cols,
             firsts_at: usize::try_from(firsts_at).ok()?,
             nibbles_at: usize::try_from(nibbles_at).ok()?,
@@ -378,6 +378,11 @@ struct PieceParts {
 }
 
 impl PieceParts {
+    /// `inv_block` for a block side `b >= 1`.
+    fn reciprocal(b: u32) -> u64 {
+        (1u64 << 32).div_ceil(u64::from(b))
+    }
+
     /// `v / block` for a row or column (`v < 2^16`, as every grid index is).
     #[inline]
     fn div_block(&self, v: u32) -> u32 {
@@ -1042,7 +1047,7 @@ mod tests {
         for b in 1..=u32::from(PIECES_MAX_BLOCK) {
             let parts = PieceParts {
                 block: b,
-                inv_block: (1u64 << 32).div_ceil(u64::from(b)),
+                inv_block: PieceParts::reciprocal(b),
                 block_cols: 1,
                 firsts_at: 0,
                 nibbles_at: 0,

@@ -53,7 +53,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
-use crate::draw::{Animation, Painter};
+use crate::draw::{Animation, Painter, Scene};
 use crate::report::{BarPanel, Bars, render};
 use crate::run::scene;
 use crate::sim::{Prepared, SimPlanner, with_live_planner, with_planner};
@@ -282,6 +282,24 @@ fn animation<'a, 'g>(
         )?)),
         _ => Ok(None),
     }
+}
+
+/// Every `every` calls of a run with `--animate`, a GIF frame of `scene()` without its trees.
+fn gif_frame(
+    gif: &mut Option<Animation<'_, '_>>,
+    pictures: Option<(&Path, Option<u32>)>,
+    call: u32,
+    scene: impl FnOnce() -> Scene,
+) -> Result<()> {
+    if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
+        && call.is_multiple_of(every)
+    {
+        let mut s = scene();
+        s.forward.clear();
+        s.reverse.clear();
+        g.frame(&s)?;
+    }
+    Ok(())
 }
 
 /// Arguments of `moving`.
@@ -668,14 +686,9 @@ fn one(
             travelled += d as f64;
             agent = next;
             trail.push(agent);
-            if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
-                && call % every == 0
-            {
-                let mut s = scene(p, &trail, &prep.scenario, 0, title(call));
-                s.forward.clear();
-                s.reverse.clear();
-                g.frame(&s)?;
-            }
+            gif_frame(&mut gif, pictures, call, || {
+                scene(p, &trail, &prep.scenario, 0, title(call))
+            })?;
             row.time_s = (call + 1) as f64 * PERIOD as f64;
         }
         row.travelled_ratio = travelled / optimum;
@@ -810,15 +823,11 @@ fn door_one(
             travelled += agent.dist(next) as f64;
             agent = next;
             trail.push(agent);
-            if let (Some(g), Some((_, Some(every)))) = (gif.as_mut(), pictures)
-                && call % every == 0
-            {
+            gif_frame(&mut gif, pictures, call, || {
                 let mut s = scene(p, &trail, &prep.scenario, 0, title(call));
-                s.forward.clear();
-                s.reverse.clear();
                 shown(&mut s, closed_since.is_some());
-                g.frame(&s)?;
-            }
+                s
+            })?;
             row.time_s = (call + 1) as f64 * PERIOD as f64;
         }
         row.travelled_ratio = travelled / optimum;
