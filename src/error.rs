@@ -87,6 +87,8 @@ error_enum! {
         PUniform => "p_uniform must lie in [0, 1]",
         /// `p_beacon` is outside `[0, 1]` or NaN.
         PBeacon => "p_beacon must lie in [0, 1]",
+        /// `p_gap` is outside `[0, 1]` or NaN.
+        PGap => "p_gap must lie in [0, 1]",
         /// A [`crate::config::Motion`] field is NaN, infinite or negative.
         Motion => "the motion's speeds, period and horizon must be finite and not negative",
     }

@@ -728,6 +728,26 @@ impl<'a> Live<'a> {
         base != (flipped && col < self.grid.cols() && row < self.grid.rows())
     }
 
+    /// Whether free cell `(col, row)` lies in a passage at most about `2 * reach` cells wide:
+    /// an occupied cell (or the map's edge) within `reach` cells on both sides, along its
+    /// row or along its column.
+    pub fn narrow_at(&self, col: u16, row: u16, reach: u16) -> bool {
+        let side = |dc: i32, dr: i32| {
+            (1..=i32::from(reach)).any(|k| {
+                // |k| <= 65,535 and the cell's indices fit `u16`: no overflow in `i32`.
+                let (c, r) = (
+                    i32::from(col).wrapping_add(k.wrapping_mul(dc)),
+                    i32::from(row).wrapping_add(k.wrapping_mul(dr)),
+                );
+                match (u16::try_from(c), u16::try_from(r)) {
+                    (Ok(c), Ok(r)) => self.is_occupied(c, r),
+                    _ => true,
+                }
+            })
+        };
+        (side(1, 0) && side(-1, 0)) || (side(0, 1) && side(0, -1))
+    }
+
     /// Whether any cell is flipped (a live map that differs from its grid).
     pub fn edited(&self) -> bool {
         self.flip.is_some()
@@ -1046,5 +1066,26 @@ mod tests {
             Err(InputError::InObstacle)
         );
         assert!(!m.free_path(Point::new(0.5, 1.5), Point::new(2.5, 1.5)));
+    }
+
+    #[test]
+    fn narrow_cells_have_walls_on_both_sides_within_reach() {
+        // A 12 x 6 grid: a wall at column 6 from row 0 to row 3; a post at (2, 4).
+        let mut buf = [0u8; OccupancyGrid::bytes_needed(12, 6)];
+        let occ = [(6, 0), (6, 1), (6, 2), (6, 3), (2, 4)];
+        let g = grid_with(&mut buf, 12, 6, &occ);
+        let live = Map::<'_, 1>::new(g);
+        let live = live.live();
+        // (2, 5): the map's top edge and the post, each one cell away along the column.
+        assert!(live.narrow_at(2, 5, 1));
+        // (2, 3): the post 1 up, the bottom edge 4 down; the left edge 3 away, the wall 4.
+        assert!(live.narrow_at(2, 3, 4) && !live.narrow_at(2, 3, 3));
+        // (5, 1): the wall beside it but the left edge 6 away; the bottom edge 2 down, the
+        // top edge 5 up: narrow along its column at reach 5.
+        assert!(live.narrow_at(5, 1, 5) && !live.narrow_at(5, 1, 4));
+        // (9, 5): the top edge above, the bottom edge 6 below; the row is open 10 cells left.
+        assert!(live.narrow_at(9, 5, 6) && !live.narrow_at(9, 5, 5));
+        // An occupied cell's own test is about its neighbours only (callers test it first).
+        assert!(live.narrow_at(6, 1, 6));
     }
 }

@@ -10,6 +10,11 @@
 //!
 //! Free states come by rejection, bounded by `attempts`; a draw that keeps failing returns
 //! `None` and the expansion is simply skipped.
+//!
+//! The tuned profile also draws, once the goal is in the tree, states in narrow passages of
+//! the informed ellipse ([`narrow_free`]: rejection among ellipse draws for a cell with walls on
+//! both sides within a few cells, after the narrow-passage samplers of PRM, e.g. the bridge
+//! test of Hsu et al. 2003, here a direct test of the cell's row and column).
 
 use rand_core::Rng;
 
@@ -53,6 +58,37 @@ pub fn ellipse_free<R: Rng + ?Sized, const K: usize>(
         let p = ellipse.sample(rng);
         map.free_point(p).then_some(p)
     })
+}
+
+/// A free state inside `ellipse` in a narrow passage (a cell with occupied cells within
+/// `reach` cells on both sides along its row or its column), or `None` after `attempts`
+/// draws. `fallback`: the first free state drawn, to use when no draw was narrow.
+pub fn narrow_free<R: Rng + ?Sized, const K: usize>(
+    rng: &mut R,
+    map: &Map<'_, K>,
+    ellipse: &Ellipse,
+    reach: u16,
+    attempts: u16,
+) -> (Option<Point>, Option<Point>, u16) {
+    let live = map.live();
+    let grid = map.grid();
+    let mut first = None;
+    for n in 0..attempts {
+        let p = ellipse.sample(rng);
+        let Some((c, r)) = grid.cell_of(p) else {
+            continue;
+        };
+        if live.is_occupied(c, r) {
+            continue;
+        }
+        if live.narrow_at(c, r, reach) && map.free_point(p) {
+            return (Some(p), first, n.saturating_add(1));
+        }
+        if first.is_none() && map.free_point(p) {
+            first = Some(p);
+        }
+    }
+    (None, first, attempts)
 }
 
 /// One draw of `X_s` (module docs). `p_goal` and `p_uniform` are the two thresholds.
@@ -106,5 +142,48 @@ impl<R: rand_core_06::RngCore> rand_core::TryRng for Rng06<R> {
     fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Self::Error> {
         self.0.fill_bytes(dst);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::{OccupancyGrid, pack_grid};
+    use rand_core::SeedableRng;
+
+    /// A 40 x 20 grid at 0.1 m: a wall at column 20 with a slit of rows 9-10; the ellipse
+    /// spans the whole width.
+    #[test]
+    fn narrow_draws_land_in_the_slit_and_inside_the_ellipse() {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(40, 20)];
+        pack_grid(&mut bits, 40, 20, |c, r| c == 20 && !(9..=10).contains(&r)).unwrap();
+        let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 40, 20, 0.1).unwrap());
+        let e = Ellipse::new(Point::new(0.5, 1.0), Point::new(3.5, 1.0), 3.4).unwrap();
+        let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
+        let (mut narrow, mut fallbacks) = (0, 0);
+        for _ in 0..200 {
+            let (n, first, draws) = narrow_free(&mut rng, &map, &e, 2, 256);
+            assert!((1..=256).contains(&draws));
+            match n {
+                Some(p) => {
+                    narrow += 1;
+                    assert!(e.contains(p) && map.free_point(p));
+                    // Reach 2: only the slit's two cells have walls on both sides (the
+                    // wall's ends above and below them); beside the wall, the row is open.
+                    let (c, r) = map.grid().cell_of(p).unwrap();
+                    assert!(c == 20 && (9..=10).contains(&r), "({c}, {r})");
+                }
+                None => {
+                    fallbacks += 1;
+                    assert_eq!(draws, 256);
+                    assert!(first.is_some_and(|p| e.contains(p) && map.free_point(p)));
+                }
+            }
+        }
+        // The slit is 2 of about 430 cells in the ellipse: 256 draws find it 70 % of the time.
+        assert!(
+            narrow > 40 && fallbacks > 10,
+            "{narrow} narrow, {fallbacks} fallbacks"
+        );
     }
 }

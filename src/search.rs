@@ -6,7 +6,9 @@
 //!
 //! - Sampling: [`crate::sample`]; with `p_beacon` (tuned), once the goal is joined, a share of
 //!   the samples falls in the `e_max` disc around a node of the current path instead
-//!   (RRT*-Smart's beacons).
+//!   (RRT*-Smart's beacons), and with `p_gap` (tuned) a share of the others in a narrow
+//!   passage of the informed ellipse (a slit a few cells wide in a drawn wall, which uniform
+//!   samples almost never reach; only on maps whose cells are at most `e_max / 16`).
 //! - RRT-Connect's greedy step (`TreeStore::connect`, tuned profile): the planner makes the
 //!   other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
@@ -597,7 +599,11 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             (Some(t), Some(v)) if v.ellipse.is_some() => self.beacon_sample(env, rng, t, meter),
             _ => None,
         };
-        let x_rand = match beacon {
+        let gap = match (beacon, &view) {
+            (None, Some(v)) => v.ellipse.and_then(|e| self.gap_sample(env, rng, &e, meter)),
+            _ => None,
+        };
+        let x_rand = match beacon.or(gap) {
             Some(p) => p,
             None => sample_state(
                 rng,
@@ -773,6 +779,30 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             from = self.insert(next, from, false).ok()?;
         }
         None
+    }
+
+    /// With probability [`crate::config::Search::p_gap`] (no draw at all when it is 0): a free
+    /// state of `ellipse` in a narrow passage, one narrower than `e_max / 8`, or failing that
+    /// the first free state drawn.
+    fn gap_sample<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
+        &self,
+        env: &Env<'_, '_, M, K>,
+        rng: &mut R,
+        ellipse: &Ellipse,
+        meter: &Meter<'_, C>,
+    ) -> Option<Point> {
+        // A map whose cells are coarse for this `e_max` has no passage that narrow: no draw.
+        let reach = sat_u32(env.cfg.search.e_max / 16.0 / env.map.grid().cell_size()).min(32);
+        let p = env.cfg.search.p_gap;
+        if reach == 0 || p <= 0.0 || unit_f32(rng) >= p {
+            return None;
+        }
+        let reach = to_u16(reach);
+        let attempts = env.cfg.search.sample_attempts.saturating_mul(4);
+        let (narrow, first, draws) =
+            crate::sample::narrow_free(rng, env.map, ellipse, reach, attempts);
+        meter.charge(u32::from(draws).saturating_mul(u32::from(reach) + 2) / 4);
+        narrow.or(first)
     }
 
     /// With probability [`crate::config::Search::p_beacon`] (no draw at all when it is 0): a free state in the

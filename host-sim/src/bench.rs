@@ -42,7 +42,7 @@ pub struct Variant {
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
 /// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`,
 /// `faithful`, `e_max`, `e_search`, `sigma`, `steer_candidates`, `p_goal`, `p_uniform`,
-/// `p_beacon`, `path_shortcuts`, `root_step`, `clock_every`, `clock_every_max`, `n_max`,
+/// `p_beacon`, `p_gap`, `path_shortcuts`, `root_step`, `clock_every`, `clock_every_max`, `n_max`,
 /// `n_max_informed`, `recycle_cover`, `as_printed` (`all` or parts joined by `+`),
 /// `profile` (`paper` or `tuned`: the tuned profile's changes without its parameters, or the
 /// reverse)), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in one run.
@@ -94,6 +94,7 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "e_search" => cfg.search.e_search = v.parse()?,
         "path_shortcuts" => cfg.rewiring.path_shortcuts = v.parse()?,
         "p_beacon" => cfg.search.p_beacon = v.parse()?,
+        "p_gap" => cfg.search.p_gap = v.parse()?,
         "recycle_cover" => cfg.memory.recycle_cover = v.parse()?,
         "root_step" => cfg.rewiring.root_step = v.parse()?,
         "sigma" => cfg.search.sigma = v.parse()?,

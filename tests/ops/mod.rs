@@ -184,6 +184,7 @@ fn run_with<M: Metric>(
     if flags & 128 != 0 {
         cfg.rewiring.path_shortcuts = 4;
         cfg.search.p_beacon = 0.2;
+        cfg.search.p_gap = 0.4;
     }
     // A second byte: the steering's candidate count, and the root's step: off (the paper) or
     // from 5 % of e_max (a root within e_max / 10 of the agent, so `follow` steps past several
