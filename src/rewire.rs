@@ -18,7 +18,8 @@
 //! - **Goal rewiring, first kind** (AM-RRT*): a stack (current branch) and a queue (next
 //!   branches) sweep from the root towards the goal inside the informed ellipse. A node `x`
 //!   offers itself as parent to its neighbours, visited in order of decreasing `d_A(., goal)`;
-//!   unseen neighbours with a free segment form the frontier, pushed on the stack (the one
+//!   unseen neighbours with a free segment (in the tuned profile: all unseen neighbours, as
+//!   root rewiring enqueues them, issue 26) form the frontier, pushed on the stack (the one
 //!   nearest the goal by the metric on top) and enqueued (first in, first out, as the paper's
 //!   Enqueue and Dequeue; it was last in, first out until issue 24). When the stack's top is
 //!   farther from the goal than `x` was, the branch stopped approaching: the stack is cleared.
@@ -449,6 +450,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let mut near = Near::new();
         let mut frontier = Near::new();
         let to_goal = env.metric.prepare(goal.pos);
+        let tuned = env.cfg.profile.is_tuned();
         for _ in 0..slice.visits {
             if meter.expired(&slice.deadline) {
                 return;
@@ -526,8 +528,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     continue;
                 }
                 self.try_rewire_via(env, parent, x_near, via, printed_cost, meter);
+                // The tuned profile enqueues every unseen neighbour, as root rewiring does:
+                // no segment test for the frontier (the rewire above tests its own).
                 if !self.tree.marked(x_near, Mark::Goal)
-                    && (printed_cost || env.free(seen_from, self.pos(x_near), meter))
+                    && (printed_cost || tuned || env.free(seen_from, self.pos(x_near), meter))
                     && frontier.push(x_near).is_ok()
                 {
                     self.tree.mark(x_near, Mark::Goal);
