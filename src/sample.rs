@@ -60,9 +60,10 @@ pub fn ellipse_free<R: Rng + ?Sized, const K: usize>(
     })
 }
 
-/// A free state inside `ellipse` in a narrow passage (a cell with occupied cells within
-/// `reach` cells on both sides along its row or its column), or `None` after `attempts`
-/// draws. `fallback`: the first free state drawn, to use when no draw was narrow.
+/// Ellipse draws until one is a free state in a narrow passage (a cell with occupied cells
+/// within `reach` cells on both sides along its row or its column), at most `attempts` of
+/// them. Returns that state (`None` if no draw was narrow), the first free state drawn (the
+/// fallback when none was narrow) and the number of draws made.
 pub fn narrow_free<R: Rng + ?Sized, const K: usize>(
     rng: &mut R,
     map: &Map<'_, K>,
