@@ -3,8 +3,9 @@
 //! the straight line from start to goal, and a 1 m opening at the top, 4 m above it. The
 //! shortest way (14.56 m) goes through the slit; the opening costs 16.27 m. Uniform samples
 //! land in the slit about once in 1,400 informed draws; with the tuned profile's gap samples
-//! the path goes through it after 3,000 expansions on each of 12 seeds. Also: a map too coarse for the gap samples (a 1 m grid for the
-//! paper's `e_max` of 5 m) grows bit for bit as with `p_gap` 0.
+//! the path goes through it after 3,000 expansions on each of 12 seeds. Also: a map too
+//! coarse for the gap samples (the hall at 0.5 m cells, for an `e_max` of 1 m) grows bit for
+//! bit as with `p_gap` 0.
 //!
 //! Deterministic: fixed seeds, a fake clock, a cap on expansions per call.
 
@@ -40,18 +41,24 @@ fn grid() -> OccupancyGrid<'static> {
     OccupancyGrid::new(bits, COLS, ROWS, CELL).unwrap()
 }
 
-/// The goal's cost after `calls` calls of at most 200 expansions each.
-fn cost_after(cfg: Config, seed: u64, calls: usize) -> f32 {
-    let mut storage: Box<Storage<N, B>> = Box::default();
-    let mut cfg = cfg.for_grid(&grid());
+/// A planner on `grid` from START to GOAL after `calls` calls of at most `per_call`
+/// expansions each: the goal's cost (infinite without a free path) and the tree's positions.
+fn grown<const NN: usize, const BB: usize>(
+    grid: OccupancyGrid<'_>,
+    mut cfg: Config,
+    seed: u64,
+    calls: usize,
+    per_call: u32,
+) -> (f32, Vec<Point>) {
+    let mut storage: Box<Storage<NN, BB>> = Box::default();
     cfg.budget.t_exp = Duration::from_millis(50);
-    cfg.budget.max_expansions = 200;
-    let mut p: Planner<'_, '_, Euclidean, XorShiftRng, N, B, 1> = Planner::new(
+    cfg.budget.max_expansions = per_call;
+    let mut p: Planner<'_, '_, Euclidean, XorShiftRng, NN, BB, 1> = Planner::new(
         &mut storage,
-        Map::new(grid()),
+        Map::new(grid),
         Euclidean,
         XorShiftRng::seed_from_u64(seed),
-        cfg,
+        cfg.for_grid(&grid),
         START,
     )
     .unwrap();
@@ -61,8 +68,15 @@ fn cost_after(cfg: Config, seed: u64, calls: usize) -> f32 {
         p.grow(&clock);
     }
     let cost = p.goal_node().and_then(|g| p.tree().cost(g));
-    cost.filter(|c| !c.blocked)
-        .map_or(f32::INFINITY, |c| c.length)
+    let cost = cost
+        .filter(|c| !c.blocked)
+        .map_or(f32::INFINITY, |c| c.length);
+    (cost, p.tree().positions().to_vec())
+}
+
+/// The goal's cost on the hall after `calls` calls of at most 200 expansions each.
+fn cost_after(cfg: Config, seed: u64, calls: usize) -> f32 {
+    grown::<N, B>(grid(), cfg, seed, calls, 200).0
 }
 
 #[test]
@@ -104,25 +118,9 @@ fn a_coarse_map_draws_no_gap_sample() {
     pack_grid(&mut bits, 40, 20, |c, r| c == 20 && r < 18).unwrap();
     let grid = OccupancyGrid::new(&bits, 40, 20, 0.5).unwrap();
     let run = |p_gap: f32| {
-        let mut storage: Box<Storage<1024, 64>> = Box::default();
-        let mut cfg = Config::default().for_grid(&grid);
+        let mut cfg = Config::default();
         cfg.search.p_gap = p_gap;
-        cfg.budget.max_expansions = 100;
-        let mut p: Planner<'_, '_, Euclidean, XorShiftRng, 1024, 64, 1> = Planner::new(
-            &mut storage,
-            Map::new(grid),
-            Euclidean,
-            XorShiftRng::seed_from_u64(7),
-            cfg,
-            START,
-        )
-        .unwrap();
-        p.set_goal(GOAL).unwrap();
-        let clock = FakeClock::nanos().with_work_cost(30).with_step(10);
-        for _ in 0..10 {
-            p.grow(&clock);
-        }
-        p.tree().positions().to_vec()
+        grown::<1024, 64>(grid, cfg, 7, 10, 100).1
     };
     let a = run(0.0);
     assert!(a.len() > 100);
