@@ -153,6 +153,11 @@ pub struct BenchArgs {
     /// Cold queries: caches flushed before every measured query ([`flush_caches`]; the
     /// OMPL harness does the same with `--cold`).
     pub cold: bool,
+    /// Each of our runs ends at its first solution, in calls of at most [`SLICE_UNTIL_FIRST`]
+    /// (or at the last budget without one), as each of RRT-Connect's runs ends at its: the
+    /// next query's caches are then those a first-solution search left, on both sides. No
+    /// costs are read.
+    pub until_first: bool,
 }
 
 /// Bytes written and read back by [`flush_caches`]: several times any last-level cache of
@@ -318,6 +323,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                         },
                         cold: args.cold,
                         equal_at,
+                        until_first: args.until_first,
                     };
                     let r = match args.nodes {
                         2048 => run.on(&mut arenas.n2048),
@@ -362,7 +368,9 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
     std::fs::write(args.out.join("summary.md"), &md)?;
     print!("{md}");
     if args.ompl.is_some() {
-        let ratios = ratios_markdown(&rows, &args.budgets, args.cold);
+        // Until the first solution: no costs to compare.
+        let budgets: &[f64] = if args.until_first { &[] } else { &args.budgets };
+        let ratios = ratios_markdown(&rows, budgets, args.cold, args.until_first);
         std::fs::write(args.out.join("ratios.md"), &ratios)?;
         print!("\n{ratios}");
     }
@@ -509,6 +517,11 @@ struct Measured {
 /// The longest single `grow` call of the bench: budgets are hit within about this much.
 const SLICE: Duration = Duration::from_micros(500);
 
+/// The longest `grow` call with [`BenchArgs::until_first`]: a run ends at most this long after
+/// its first solution (a call reads the clock once more than the calls of [`SLICE`], about
+/// 0.4 us every 50 us of growth: under 1 %).
+pub const SLICE_UNTIL_FIRST: Duration = Duration::from_micros(50);
+
 /// The bench's planner storage, one per tree size, allocated once and reused by every run (as
 /// a firmware's `static`, which the planner resets): no allocation or first touch of fresh
 /// memory inside the measurements. The results are the same as on fresh storage.
@@ -531,6 +544,7 @@ struct Run<'a> {
     cold: bool,
     /// The equal-time reading's time, in CPU seconds.
     equal_at: Option<f64>,
+    until_first: bool,
 }
 
 impl Run<'_> {
@@ -544,7 +558,11 @@ impl Run<'_> {
             if self.cold {
                 flush_caches();
             }
-            measure(p, self.goal, self.budgets, self.equal_at, self.clock)
+            if self.until_first {
+                measure_first(p, self.goal, self.budgets, self.clock)
+            } else {
+                measure(p, self.goal, self.budgets, self.equal_at, self.clock)
+            }
         })
     }
 }
@@ -625,6 +643,53 @@ fn measure<const N: usize>(
         first_nodes: first.map(|f| f.2),
         costs,
         equal,
+        nodes: planner.tree().len(),
+        expansions: st.expansions + st.reverse_expansions,
+        reads: clock.reads(),
+        cpu_s,
+        full,
+    })
+}
+
+/// [`measure`] until the first solution ([`BenchArgs::until_first`]): calls of at most
+/// [`SLICE_UNTIL_FIRST`] until the goal joins or the last budget has passed; no costs.
+fn measure_first<const N: usize>(
+    planner: &mut SizedPlanner<'_, '_, N>,
+    goal: bi_am_rrt::Point,
+    budgets: &[f64],
+    kind: BenchClock,
+) -> Result<Measured> {
+    let clock = RunClock::new(kind);
+    let t0 = bi_am_rrt::clock::Clock::now(&clock);
+    planner.set_goal(goal).map_err(|e| anyhow!("goal: {e}"))?;
+    let secs = |t: u64| t.saturating_sub(t0) as f64 * 1e-9;
+    let end = budgets.last().copied().unwrap_or(0.0);
+    let mut full = false;
+    let mut first: Option<(f64, f64, usize)> = None;
+    // No reading of the harness's own before the first call ([`measure`]).
+    let mut now = 0.0;
+    while first.is_none() && now < end {
+        let left = Duration::from_secs_f64(end - now).min(SLICE_UNTIL_FIRST);
+        planner
+            .set_t_exp(left.max(Duration::from_micros(1)))
+            .map_err(|e| anyhow!("{e}"))?;
+        let p = planner.grow(&clock);
+        full |= p.tree_full;
+        if let (Some(at), Some(c)) = (planner.stats().goal_found_at, p.goal_cost) {
+            let len = planner.stats().first_cost.unwrap_or(c.length) as f64;
+            first = Some((secs(at), len, planner.stats().nodes_at_goal.unwrap_or(0)));
+        } else {
+            now = secs(bi_am_rrt::clock::Clock::now(&clock));
+        }
+    }
+    let cpu_s = secs(bi_am_rrt::clock::Clock::now(&clock));
+    let st = planner.stats();
+    Ok(Measured {
+        first_s: first.map(|f| f.0),
+        first_len: first.map(|f| f.1),
+        first_nodes: first.map(|f| f.2),
+        costs: vec![None; budgets.len()],
+        equal: None,
         nodes: planner.tree().len(),
         expansions: st.expansions + st.reverse_expansions,
         reads: clock.reads(),
@@ -866,11 +931,21 @@ pub fn leg_ratios(ours: &[(usize, f64)], theirs: &[(usize, f64)]) -> Option<(f64
 /// medians over seeds, then the median of the per-leg ratios and the worst leg): first-solution
 /// time against RRT-Connect, first path against RRT-Connect + simplify, and the cost at each
 /// budget against Informed RRT*. Below 1 is ours ahead.
-pub fn ratios_markdown(rows: &[BenchRow], budgets: &[f64], cold: bool) -> String {
-    let mode = if cold {
-        "cold: caches flushed (64 MiB written and read) before every query, ours and OMPL's"
-    } else {
-        "warm: each query on the caches the previous one left"
+pub fn ratios_markdown(
+    rows: &[BenchRow],
+    budgets: &[f64],
+    cold: bool,
+    until_first: bool,
+) -> String {
+    let mode = match (cold, until_first) {
+        (true, _) => {
+            "cold: caches flushed (64 MiB written and read) before every query, ours and OMPL's"
+        }
+        (false, false) => "warm: each query on the caches the previous one left",
+        (false, true) => {
+            "warm, until the first solution: each query on the caches the previous one left, \
+             and each of our queries, as each of RRT-Connect's, ended at its first solution"
+        }
     };
     let mut s = format!(
         "Per-leg ratios, ours / OMPL's in the same run ({mode}); median over legs, and the \
@@ -912,10 +987,18 @@ pub fn ratios_markdown(rows: &[BenchRow], budgets: &[f64], cold: bool) -> String
             &ours(&|r| r.first_ratio),
             &theirs(OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_ratio),
         );
-        let equal = leg_ratios(
-            &ours(&|r| r.equal_ratio),
-            &theirs(OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_ratio),
-        );
+        // No equal-time reading in runs that end at their first solution.
+        let read = rows
+            .iter()
+            .any(|r| r.map == map && r.planner == planner && r.equal_us.is_some());
+        let equal = read
+            .then(|| {
+                leg_ratios(
+                    &ours(&|r| r.equal_ratio),
+                    &theirs(OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_ratio),
+                )
+            })
+            .flatten();
         // How late our equal-time readings came: per run, after the leg's equal time.
         let t_eq = leg_medians(rows, &map, OMPL_RRT_CONNECT_SIMPLIFIED, &|r| r.first_us);
         let mut late: Vec<f64> = rows

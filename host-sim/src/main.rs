@@ -307,6 +307,13 @@ enum Command {
         /// running on the caches the previous one left (warm, the default).
         #[arg(long)]
         cold: bool,
+        /// Each of our runs ends at its first solution (or at the last budget without one),
+        /// as each of RRT-Connect's runs ends at its: a warm query then starts on the caches a
+        /// first-solution search left, as RRT-Connect's do, not on those of a query that grew
+        /// for the whole budget. No costs are read (their columns stay empty): for
+        /// first-solution figures only.
+        #[arg(long)]
+        until_first: bool,
     },
     /// Soak test: one planner and one agent for a long time with a new random goal every few
     /// seconds (CPU time of the planner thread). Prints a line per minute and writes soak.csv.
@@ -754,6 +761,7 @@ fn main() -> Result<()> {
             clock,
             paper_lengths,
             cold,
+            until_first,
         } => {
             if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
                 bail!("--budgets: every budget must be a positive number of seconds");
@@ -776,6 +784,7 @@ fn main() -> Result<()> {
                 ompl,
                 clock,
                 cold,
+                until_first,
             })
             .map(|_| ())
         }

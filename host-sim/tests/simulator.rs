@@ -839,6 +839,7 @@ fn bench_measures_every_leg_variant_and_seed() {
         ompl: None,
         clock: host_sim::bench::BenchClock::Virtual,
         cold: false,
+        until_first: false,
     })
     .unwrap();
     assert_eq!(rows.len(), legs * 2 * 2);
@@ -857,6 +858,43 @@ fn bench_measures_every_leg_variant_and_seed() {
         assert!(dir.path().join(f).exists(), "{f}");
     }
     assert!(host_sim::bench::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
+}
+
+/// `bench --until-first`: each run ends at its first solution (no costs read), so it grows no
+/// more nodes than the same run with budgets (virtual clock: the same runs, repeatably), and
+/// in total fewer.
+#[test]
+fn bench_until_first_ends_each_run_at_its_first_solution() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = maps::builtin_by_name("open").unwrap();
+    let args = |until_first| host_sim::bench::BenchArgs {
+        scenarios: vec![s.clone()],
+        legs: vec![],
+        variants: host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        seeds: 3,
+        budgets: vec![0.002, 0.02],
+        nodes: 2048,
+        out: dir
+            .path()
+            .join(if until_first { "first" } else { "budgets" }),
+        table: TableOptions::default(),
+        ompl: None,
+        clock: host_sim::bench::BenchClock::Virtual,
+        cold: false,
+        until_first,
+    };
+    let full = host_sim::bench::run(&args(false)).unwrap();
+    let first = host_sim::bench::run(&args(true)).unwrap();
+    assert_eq!(first.len(), full.len());
+    for (a, b) in first.iter().zip(&full) {
+        assert_eq!((a.leg, a.seed), (b.leg, b.seed));
+        assert!(a.first_us.is_some(), "{a:?}");
+        assert!(a.cost_ratio.iter().all(Option::is_none), "{a:?}");
+        assert!(b.cost_ratio.iter().all(Option::is_some), "{b:?}");
+        assert!(a.nodes <= b.nodes, "{a:?} {b:?}");
+    }
+    let total = |rows: &[host_sim::bench::BenchRow]| rows.iter().map(|r| r.nodes).sum::<usize>();
+    assert!(total(&first) < total(&full));
 }
 
 /// `bench --ompl`: the harness gets each leg's grid and query in files and its CSV rows join
@@ -899,6 +937,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
         ompl: Some(script.clone()),
         clock: host_sim::bench::BenchClock::Cpu,
         cold: false,
+        until_first: false,
     };
     let rows = host_sim::bench::run(&args(3)).unwrap();
     let ratios = std::fs::read_to_string(dir.path().join("out/ratios.md")).unwrap();
