@@ -153,8 +153,8 @@ pub struct BenchArgs {
     /// Cold queries: caches flushed before every measured query ([`flush_caches`]; the
     /// OMPL harness does the same with `--cold`).
     pub cold: bool,
-    /// Each of our runs ends at its first solution, in calls of at most [`SLICE_UNTIL_FIRST`]
-    /// (or at the last budget without one), as each of RRT-Connect's runs ends at its: the
+    /// Each of our runs ends at its first solution, in calls of at most 50 us (or at the last
+    /// budget without one), as each of RRT-Connect's runs ends at its: the
     /// next query's caches are then those a first-solution search left, on both sides. No
     /// costs are read.
     pub until_first: bool,
@@ -520,7 +520,7 @@ const SLICE: Duration = Duration::from_micros(500);
 /// The longest `grow` call with [`BenchArgs::until_first`]: a run ends at most this long after
 /// its first solution (a call reads the clock once more than the calls of [`SLICE`], about
 /// 0.4 us every 50 us of growth: under 1 %).
-pub const SLICE_UNTIL_FIRST: Duration = Duration::from_micros(50);
+const SLICE_UNTIL_FIRST: Duration = Duration::from_micros(50);
 
 /// The bench's planner storage, one per tree size, allocated once and reused by every run (as
 /// a firmware's `static`, which the planner resets): no allocation or first touch of fresh
