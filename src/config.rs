@@ -213,7 +213,9 @@ pub struct Search {
     /// `e_max / 16` along its row or its column, found by rejection among up to
     /// `4 sample_attempts` draws (the first free draw when none is narrow). A slit of a few
     /// cells in a drawn wall is a region uniform sampling almost never reaches, and the
-    /// shortest path often goes through it (issue 26: nav2's warehouse). Nothing is drawn on
+    /// shortest path often goes through it (issue 26: nav2's warehouse). A narrow sample
+    /// that the nearest node's step does not reach is added as it is, below a neighbour
+    /// within `e_max` that sees it (none: no node), not steered to. Nothing is drawn on
     /// a map whose cells are coarser than `e_max / 16`: the paper's 1 m maps never draw.
     /// 0 = never (the paper).
     pub p_gap: f32,
@@ -443,7 +445,8 @@ impl Config {
     /// - `path_shortcuts` 4: the path straightens between its corner nodes (Theta*'s step);
     /// - `p_beacon` 0.2: a fifth of the samples fall near the path's nodes (its corners);
     /// - `p_gap` 0.4: of the other informed samples, two in five are drawn in the ellipse's
-    ///   narrow passages (on maps fine enough to have any: cells of at most `e_max / 16`);
+    ///   narrow passages (on maps fine enough to have any: cells of at most `e_max / 16`),
+    ///   and one the nearest node's step does not reach becomes a node where it was drawn;
     /// - `root_step` `e_max`: the root (the agent's next waypoint) advances at most `e_max`
     ///   at a time along the long edges the shortcuts make, only along a path to the goal,
     ///   and takes the path's node after next as child first when that is shorter.

@@ -8,7 +8,9 @@
 //!   the samples falls in the `e_max` disc around a node of the current path instead
 //!   (RRT*-Smart's beacons), and with `p_gap` (tuned) a share of the others in a narrow
 //!   passage of the informed ellipse (a slit a few cells wide in a drawn wall, which uniform
-//!   samples almost never reach; only on maps whose cells are at most `e_max / 16`).
+//!   samples almost never reach; only on maps whose cells are at most `e_max / 16`). When the
+//!   nearest node's step towards such a sample is blocked, the sample itself is the new state
+//!   (below a neighbour that sees it, or nothing): steering would put it outside the passage.
 //! - RRT-Connect's greedy step (`TreeStore::connect`, tuned profile): the planner makes the
 //!   other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
@@ -603,7 +605,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             (None, Some(v)) => v.ellipse.and_then(|e| self.gap_sample(env, rng, &e, meter)),
             _ => None,
         };
-        let x_rand = match beacon.or(gap) {
+        // A sample that landed in a narrow passage (not the fallback draw).
+        let narrow = gap.is_some_and(|(_, n)| n);
+        let x_rand = match beacon.or(gap.map(|(p, _)| p)) {
             Some(p) => p,
             None => sample_state(
                 rng,
@@ -635,7 +639,15 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         if meter.expired(&env.call) {
             return None;
         }
-        let x_new = self.steer(env, rng, x_nearest, x_rand, step, step_free && tuned, meter)?;
+        // A narrow sample whose nearest node's step is blocked is taken as it is, below any
+        // node within the radius that sees it (`best_parent`, none: no node): steering from
+        // the nearest node would put the node outside the passage the sample found.
+        let direct = narrow && !step_free;
+        let x_new = if direct {
+            x_rand
+        } else {
+            self.steer(env, rng, x_nearest, x_rand, step, step_free && tuned, meter)?
+        };
         if meter.expired(&env.call) {
             return None;
         }
@@ -691,10 +703,15 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
             return None;
         }
-        // Keep x_nearest a candidate even when the list was truncated.
-        keep_candidate(&mut near, x_nearest);
-        // The steering's segment from x_nearest is known free.
-        let seen = tuned.then_some(x_nearest);
+        // Keep x_nearest a candidate even when the list was truncated (steered: it sees
+        // `x_new`).
+        let seen = if direct {
+            None
+        } else {
+            keep_candidate(&mut near, x_nearest);
+            // The steering's segment from x_nearest is known free.
+            tuned.then_some(x_nearest)
+        };
         let parent = self.best_parent(env, x_new, &mut near, seen, meter)?;
         // The new state's cost bound below `parent`: a lower bound of a path through it.
         let bound = |s: &Self, goal: Point| {
@@ -790,7 +807,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         rng: &mut R,
         ellipse: &Ellipse,
         meter: &Meter<'_, C>,
-    ) -> Option<Point> {
+    ) -> Option<(Point, bool)> {
         // A map whose cells are coarse for this `e_max` has no passage that narrow: no draw.
         let reach = sat_u32(env.cfg.search.e_max / 16.0 / env.map.grid().cell_size()).min(32);
         let p = env.cfg.search.p_gap;
@@ -802,7 +819,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let (narrow, first, draws) =
             crate::sample::narrow_free(rng, env.map, ellipse, reach, attempts);
         meter.charge(u32::from(draws).saturating_mul(u32::from(reach) + 2) / 4);
-        narrow.or(first)
+        match narrow {
+            Some(p) => Some((p, true)),
+            None => first.map(|p| (p, false)),
+        }
     }
 
     /// With probability [`crate::config::Search::p_beacon`] (no draw at all when it is 0): a free state in the

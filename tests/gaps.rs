@@ -3,7 +3,9 @@
 //! the straight line from start to goal, and a 1 m opening at the top, 4 m above it. The
 //! shortest way (14.56 m) goes through the slit; the opening costs 16.27 m. Uniform samples
 //! land in the slit about once in 1,400 informed draws; with the tuned profile's gap samples
-//! the path goes through it after 3,000 expansions on each of 12 seeds. Also: a map too
+//! the path goes through it after 1,000 expansions on each of 12 seeds (8 of 12 when a gap
+//! sample is steered to like any other, instead of taken as it is below a node that sees it;
+//! 4 of 12 after 3,000 expansions without gap samples). Also: a map too
 //! coarse for the gap samples (the hall at 0.5 m cells, for an `e_max` of 1 m) grows bit for
 //! bit as with `p_gap` 0.
 //!
@@ -88,12 +90,12 @@ fn gap_samples_find_a_slit_the_shortest_path_goes_through() {
     );
     let mut without = tuned;
     without.search.p_gap = 0.0;
-    // After 15 calls of 200 expansions. Without gap samples 4 of the 12 seeds have a path
-    // through the slit then (5 after 20 calls, 10 after 30): the map is one uniform sampling
-    // finds hard, or the test would show nothing.
+    // With gap samples after 5 calls of 200 expansions; without, after 15: 4 of the 12 seeds
+    // have a path through the slit then (5 after 20 calls, 10 after 30): the map is one
+    // uniform sampling finds hard, or the test would show nothing.
     let mut through = 0;
     for seed in 1..=12 {
-        let with_gaps = cost_after(tuned, seed, 15);
+        let with_gaps = cost_after(tuned, seed, 5);
         let uniform = cost_after(without, seed, 15);
         println!("seed {seed}: with gap samples {with_gaps:.3} m, without {uniform:.3} m");
         // Through the opening the path is at least 16.27 m; through the slit 14.56 m.
