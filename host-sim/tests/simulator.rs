@@ -897,6 +897,36 @@ fn bench_until_first_ends_each_run_at_its_first_solution() {
     assert!(total(&first) < total(&full));
 }
 
+/// `bench --clock steady`: the planners run on the monotonic clock (each run's first
+/// solution takes a positive time, shorter than the whole bench's wall time).
+#[test]
+fn bench_runs_on_the_steady_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = maps::builtin_by_name("open").unwrap();
+    let wall = std::time::Instant::now();
+    let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
+        scenarios: vec![s.clone()],
+        legs: vec![1, 2],
+        variants: host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        seeds: 2,
+        budgets: vec![0.002],
+        nodes: 2048,
+        out: dir.path().to_path_buf(),
+        table: TableOptions::default(),
+        ompl: None,
+        clock: host_sim::bench::BenchClock::Steady,
+        cold: false,
+        until_first: true,
+    })
+    .unwrap();
+    let elapsed = wall.elapsed().as_secs_f64() * 1e6;
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        let t = r.first_us.unwrap();
+        assert!(t > 0.0 && t < elapsed, "{r:?}");
+    }
+}
+
 /// `bench --ompl`: the harness gets each leg's grid and query in files and its CSV rows join
 /// the table under their own planner name (a stand-in script here, so the test needs no OMPL;
 /// a harness that answers the wrong number of rows is an error).
