@@ -569,24 +569,30 @@ impl Run<'_> {
             if self.cold {
                 flush_caches();
             }
-            if self.until_first {
-                measure_first(p, self.goal, self.budgets, self.clock)
-            } else {
-                measure(p, self.goal, self.budgets, self.equal_at, self.clock)
-            }
+            measure(
+                p,
+                self.goal,
+                self.budgets,
+                self.equal_at,
+                self.clock,
+                self.until_first,
+            )
         })
     }
 }
 
 /// Grows `planner` towards `goal` until each CPU budget has passed (module docs), and reads
 /// the path's cost once more at `equal_at` (the calls then end there as at a budget; past the
-/// last budget, the run grows until then).
+/// last budget, the run grows until then). With `until_first` ([`BenchArgs::until_first`]):
+/// calls of at most [`SLICE_UNTIL_FIRST`] until the goal joins or the last budget has passed,
+/// and no cost read.
 fn measure<const N: usize>(
     planner: &mut SizedPlanner<'_, '_, N>,
     goal: bi_am_rrt::Point,
     budgets: &[f64],
     equal_at: Option<f64>,
     kind: BenchClock,
+    until_first: bool,
 ) -> Result<Measured> {
     let clock = RunClock::new(kind);
     let t0 = bi_am_rrt::clock::Clock::now(&clock);
@@ -597,8 +603,17 @@ fn measure<const N: usize>(
     let mut first: Option<(f64, f64, usize)> = None;
     let secs = |t: u64| t.saturating_sub(t0) as f64 * 1e-9;
     // The budgets and the equal-time reading, in time order (`true`: the equal-time one).
-    let mut stops: Vec<(f64, bool)> = budgets.iter().map(|&b| (b, false)).collect();
-    if let Some(t) = equal_at {
+    let mut stops: Vec<(f64, bool)> = if until_first {
+        budgets.last().map(|&b| (b, false)).into_iter().collect()
+    } else {
+        budgets.iter().map(|&b| (b, false)).collect()
+    };
+    let slice = if until_first {
+        SLICE_UNTIL_FIRST
+    } else {
+        SLICE
+    };
+    if let Some(t) = equal_at.filter(|_| !until_first) {
         // Read even past the last budget (the run then grows that long).
         stops.push((t, true));
     }
@@ -609,7 +624,7 @@ fn measure<const N: usize>(
     // its own between its two (`benches/ompl/rrt_connect.cpp`). Zero is `t0`, read just
     // before `set_goal`.
     let mut first_call = true;
-    for (b, is_equal) in stops {
+    'stops: for (b, is_equal) in stops {
         loop {
             let now = if first_call {
                 first_call = false;
@@ -620,7 +635,7 @@ fn measure<const N: usize>(
             if now >= b {
                 break;
             }
-            let left = Duration::from_secs_f64(b - now).min(SLICE);
+            let left = Duration::from_secs_f64(b - now).min(slice);
             planner
                 .set_t_exp(left.max(Duration::from_micros(1)))
                 .map_err(|e| anyhow!("{e}"))?;
@@ -633,6 +648,9 @@ fn measure<const N: usize>(
                 // rewiring ran in the same call: read the length the goal joined with.
                 let len = planner.stats().first_cost.unwrap_or(c.length) as f64;
                 first = Some((secs(at), len, planner.stats().nodes_at_goal.unwrap_or(0)));
+            }
+            if until_first && first.is_some() {
+                break 'stops;
             }
         }
         let c = planner
@@ -652,55 +670,13 @@ fn measure<const N: usize>(
         first_s: first.map(|f| f.0),
         first_len: first.map(|f| f.1),
         first_nodes: first.map(|f| f.2),
-        costs,
-        equal,
-        nodes: planner.tree().len(),
-        expansions: st.expansions + st.reverse_expansions,
-        reads: clock.reads(),
-        cpu_s,
-        full,
-    })
-}
-
-/// [`measure`] until the first solution ([`BenchArgs::until_first`]): calls of at most
-/// [`SLICE_UNTIL_FIRST`] until the goal joins or the last budget has passed; no costs.
-fn measure_first<const N: usize>(
-    planner: &mut SizedPlanner<'_, '_, N>,
-    goal: bi_am_rrt::Point,
-    budgets: &[f64],
-    kind: BenchClock,
-) -> Result<Measured> {
-    let clock = RunClock::new(kind);
-    let t0 = bi_am_rrt::clock::Clock::now(&clock);
-    planner.set_goal(goal).map_err(|e| anyhow!("goal: {e}"))?;
-    let secs = |t: u64| t.saturating_sub(t0) as f64 * 1e-9;
-    let end = budgets.last().copied().unwrap_or(0.0);
-    let mut full = false;
-    let mut first: Option<(f64, f64, usize)> = None;
-    // No reading of the harness's own before the first call ([`measure`]).
-    let mut now = 0.0;
-    while first.is_none() && now < end {
-        let left = Duration::from_secs_f64(end - now).min(SLICE_UNTIL_FIRST);
-        planner
-            .set_t_exp(left.max(Duration::from_micros(1)))
-            .map_err(|e| anyhow!("{e}"))?;
-        let p = planner.grow(&clock);
-        full |= p.tree_full;
-        if let (Some(at), Some(c)) = (planner.stats().goal_found_at, p.goal_cost) {
-            let len = planner.stats().first_cost.unwrap_or(c.length) as f64;
-            first = Some((secs(at), len, planner.stats().nodes_at_goal.unwrap_or(0)));
+        // Until the first solution: no cost is read.
+        costs: if until_first {
+            vec![None; budgets.len()]
         } else {
-            now = secs(bi_am_rrt::clock::Clock::now(&clock));
-        }
-    }
-    let cpu_s = secs(bi_am_rrt::clock::Clock::now(&clock));
-    let st = planner.stats();
-    Ok(Measured {
-        first_s: first.map(|f| f.0),
-        first_len: first.map(|f| f.1),
-        first_nodes: first.map(|f| f.2),
-        costs: vec![None; budgets.len()],
-        equal: None,
+            costs
+        },
+        equal,
         nodes: planner.tree().len(),
         expansions: st.expansions + st.reverse_expansions,
         reads: clock.reads(),
