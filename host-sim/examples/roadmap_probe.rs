@@ -1,0 +1,329 @@
+//! Experiment for issue 26 (not part of the planner): how fast could a first solution be found
+//! on a roadmap baked offline from the grid, as the diffusion table is, and searched at query
+//! time? The roadmap is a reduced visibility graph: a node just off every convex corner of the
+//! occupied cells, and an edge between two nodes that see each other over a free segment whose
+//! line is tangent to the obstacle at both ends (a shortest path bends only at convex corners,
+//! and each of its segments is tangent there). A query tests the segment start-goal, connects
+//! start and goal to the nearest nodes they see, and runs A* (Euclidean heuristic).
+//!
+//! ```text
+//! cargo run --release -p host-sim --example roadmap_probe -- SCENARIOS [--bench DIR] [--maps a,b] [--block-m M]
+//! ```
+//!
+//! With `--bench` (a `host-sim bench ... --ompl` output of the same scenarios), each leg's
+//! query time is divided by RRT-Connect's median first-solution time there, and each path by
+//! the leg's optimum. Times are warm (the median of 21 batches of 1,000 runs of the same
+//! query). `--block-m` keeps one corner per square block of that side (fewer nodes on
+//! fine maps, at the price of completeness). `--cold` flushes the caches before each query
+//! (as `bench --cold`) and times it alone. Findings: docs/performance.md, "A baked roadmap".
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use bi_am_rrt::geometry::Point;
+use bi_am_rrt::map::OccupancyGrid;
+
+/// Nodes stand this far (in cells) off their corner, along the corner's diagonal.
+const OFFSET_CELLS: f32 = 0.6;
+/// Nodes start and goal try to see, nearest first.
+const CONNECT: usize = 16;
+
+struct Roadmap {
+    nodes: Vec<Point>,
+    /// Per node: the diagonal pointing into its corner's occupied cell.
+    into: Vec<(f32, f32)>,
+    /// Compressed adjacency (both directions).
+    first: Vec<u32>,
+    next: Vec<u16>,
+}
+
+impl Roadmap {
+    fn bake(g: &OccupancyGrid<'_>, block_m: Option<f32>, wall_m: Option<f32>) -> Self {
+        let cell = g.cell_size();
+        let (cols, rows) = (i32::from(g.cols()), i32::from(g.rows()));
+        let occ = |c: i32, r: i32| {
+            c < 0 || r < 0 || c >= cols || r >= rows || g.is_occupied(c as u16, r as u16)
+        };
+        let (mut nodes, mut into) = (Vec::new(), Vec::new());
+        let block = block_m.map_or(1, |m| ((m / cell).round() as i32).max(1));
+        let wall = wall_m.map_or(1, |m| ((m / cell).round() as i32).max(1));
+        let mut taken = std::collections::HashSet::new();
+        for vy in 1..rows {
+            for vx in 1..cols {
+                let q = [
+                    occ(vx - 1, vy - 1),
+                    occ(vx, vy - 1),
+                    occ(vx - 1, vy),
+                    occ(vx, vy),
+                ];
+                if q.iter().filter(|&&o| o).count() != 1 {
+                    continue;
+                }
+                let d = match q.iter().position(|&o| o) {
+                    Some(0) => (-1.0, -1.0),
+                    Some(1) => (1.0, -1.0),
+                    Some(2) => (-1.0, 1.0),
+                    _ => (1.0, 1.0),
+                };
+                let p = Point::new(
+                    (vx as f32 - OFFSET_CELLS * d.0) * cell,
+                    (vy as f32 - OFFSET_CELLS * d.1) * cell,
+                );
+                // The occupied quadrant's cell, and how far the obstacle's two sides run from the
+                // corner (in cells): a bump of pixel noise has two short sides.
+                let (cx, cy) = (vx + (d.0 as i32 - 1) / 2, vy + (d.1 as i32 - 1) / 2);
+                let run = |sx: i32, sy: i32| {
+                    (0..wall).take_while(|&k| occ(cx + k * sx, cy + k * sy)).count() as i32
+                };
+                if wall > 1 && run(d.0 as i32, 0) < wall && run(0, d.1 as i32) < wall {
+                    continue;
+                }
+                let key = (vx / block, vy / block);
+                if block > 1 && !taken.insert(key) {
+                    continue;
+                }
+                if g.point_free(p) && nodes.len() < usize::from(u16::MAX) {
+                    nodes.push(p);
+                    into.push(d);
+                }
+            }
+        }
+        let mut adj: Vec<Vec<u16>> = vec![Vec::new(); nodes.len()];
+        for i in 0..nodes.len() {
+            for j in i + 1..nodes.len() {
+                let e = (nodes[j].x - nodes[i].x, nodes[j].y - nodes[i].y);
+                if tangent(e, into[i]) && tangent(e, into[j]) && g.segment_free(nodes[i], nodes[j])
+                {
+                    adj[i].push(j as u16);
+                    adj[j].push(i as u16);
+                }
+            }
+        }
+        let mut first = vec![0u32];
+        let mut next = Vec::new();
+        for a in adj {
+            next.extend(a);
+            first.push(next.len() as u32);
+        }
+        Self {
+            nodes,
+            into,
+            first,
+            next,
+        }
+    }
+
+    fn bytes(&self) -> usize {
+        self.nodes.len() * 8 + self.first.len() * 4 + self.next.len() * 2
+    }
+
+    /// The nodes `p` sees over a free segment tangent at the node, nearest first, at most
+    /// [`CONNECT`] of them (the `CONNECT` nearest tangent nodes are tested).
+    fn seen_from(
+        &self,
+        g: &OccupancyGrid<'_>,
+        p: Point,
+        order: &mut Vec<(f32, u16)>,
+    ) -> Vec<(u16, f32)> {
+        order.clear();
+        for (i, n) in self.nodes.iter().enumerate() {
+            let e = (n.x - p.x, n.y - p.y);
+            if tangent(e, self.into[i]) {
+                order.push((n.dist_sq(p), i as u16));
+            }
+        }
+        let k = CONNECT.min(order.len());
+        if k > 0 && k < order.len() {
+            order.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+        }
+        order[..k].sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        order[..k]
+            .iter()
+            .filter(|&&(_, i)| g.segment_free(p, self.nodes[usize::from(i)]))
+            .map(|&(d2, i)| (i, d2.sqrt()))
+            .collect()
+    }
+
+    /// The length of the shortest start-goal path over the roadmap, if any.
+    fn query(
+        &self,
+        g: &OccupancyGrid<'_>,
+        start: Point,
+        goal: Point,
+        s: &mut Scratch,
+    ) -> Option<f32> {
+        if g.segment_free(start, goal) {
+            return Some(start.dist(goal));
+        }
+        let ends = self.seen_from(g, goal, &mut s.order);
+        let starts = self.seen_from(g, start, &mut s.order);
+        s.dist.clear();
+        s.dist.resize(self.nodes.len(), f32::INFINITY);
+        s.to_goal.clear();
+        s.to_goal.resize(self.nodes.len(), f32::INFINITY);
+        for &(i, d) in &ends {
+            s.to_goal[usize::from(i)] = d;
+        }
+        s.heap.clear();
+        for &(i, d) in &starts {
+            s.dist[usize::from(i)] = d;
+            let f = d + self.nodes[usize::from(i)].dist(goal);
+            s.heap.push(Reverse((f.to_bits(), i)));
+        }
+        let mut best = f32::INFINITY;
+        while let Some(Reverse((f, i))) = s.heap.pop() {
+            if f32::from_bits(f) >= best {
+                break;
+            }
+            let i = usize::from(i);
+            let di = s.dist[i];
+            best = best.min(di + s.to_goal[i]);
+            let (a, b) = (self.first[i] as usize, self.first[i + 1] as usize);
+            for &j in &self.next[a..b] {
+                let ju = usize::from(j);
+                let nd = di + self.nodes[i].dist(self.nodes[ju]);
+                if nd < s.dist[ju] {
+                    s.dist[ju] = nd;
+                    let f = nd + self.nodes[ju].dist(goal);
+                    s.heap.push(Reverse((f.to_bits(), j)));
+                }
+            }
+        }
+        best.is_finite().then_some(best)
+    }
+}
+
+#[derive(Default)]
+struct Scratch {
+    order: Vec<(f32, u16)>,
+    dist: Vec<f32>,
+    to_goal: Vec<f32>,
+    heap: BinaryHeap<Reverse<(u32, u16)>>,
+}
+
+/// Whether the line along `e` through a corner node does not cut into the corner's occupied
+/// quadrant (diagonal `d`): within 45 degrees of the diagonal, either way, it would.
+fn tangent(e: (f32, f32), d: (f32, f32)) -> bool {
+    let along = (e.0 * d.0 + e.1 * d.1).abs();
+    along * along <= (e.0 * e.0 + e.1 * e.1) * 1.0001
+}
+
+/// Per (map, leg): RRT-Connect's median first-solution time (us) and the leg's optimum (m).
+fn bench_figures(dir: &Path) -> Result<HashMap<(String, usize), (f64, f64)>> {
+    let text = std::fs::read_to_string(dir.join("bench.csv")).context("bench.csv")?;
+    let mut rdr = csv::Reader::from_reader(text.as_bytes());
+    let mut times: HashMap<(String, usize), (Vec<f64>, f64)> = HashMap::new();
+    for rec in rdr.records() {
+        let r = rec?;
+        if &r[2] != "OMPL RRT-Connect" || r[5].is_empty() {
+            continue;
+        }
+        let e = times
+            .entry((r[0].to_string(), r[1].parse()?))
+            .or_insert((Vec::new(), r[4].parse()?));
+        e.0.push(r[5].parse()?);
+    }
+    Ok(times
+        .into_iter()
+        .map(|(k, (mut t, opt))| {
+            t.sort_by(f64::total_cmp);
+            (k, (t[t.len() / 2], opt))
+        })
+        .collect())
+}
+
+#[derive(clap::Parser)]
+struct Args {
+    /// Scenario file, or `builtin`.
+    scenarios: PathBuf,
+    /// A bench output of the same scenarios with `--ompl` (RRT-Connect's times, the optima).
+    #[arg(long)]
+    bench: Option<PathBuf>,
+    /// Only these scenarios (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    maps: Option<Vec<String>>,
+    /// Keep one corner per square block of this side, in metres.
+    #[arg(long)]
+    block_m: Option<f32>,
+    /// Keep only corners where a side of the obstacle runs at least this long, in metres
+    /// (drops the corners of pixel noise on fine maps).
+    #[arg(long)]
+    wall_m: Option<f32>,
+    /// Flush the caches (as `bench --cold`) before each query, timed alone (21 of them).
+    #[arg(long)]
+    cold: bool,
+}
+
+fn main() -> Result<()> {
+    let args = <Args as clap::Parser>::parse();
+    let bench = match &args.bench {
+        Some(d) => bench_figures(d)?,
+        None => HashMap::new(),
+    };
+    let scenarios = host_sim::maps::load_scenarios(&args.scenarios, args.maps.as_deref())?;
+    println!(
+        "| map | nodes | edges | bytes | bake ms | per leg: query us (/ RRT-Connect), path / optimum |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for s in &scenarios {
+        let g = s.map.grid();
+        let t0 = Instant::now();
+        let rm = Roadmap::bake(&g, args.block_m, args.wall_m);
+        let bake_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let mut legs = Vec::new();
+        let mut ratios = Vec::new();
+        let starts = host_sim::optimum::leg_starts(s);
+        for (leg, (&from, &goal)) in starts.iter().zip(&s.goals).enumerate() {
+            let mut sc = Scratch::default();
+            let len = rm.query(&g, from, goal, &mut sc);
+            let reps = if args.cold { 1 } else { 1000 };
+            let mut batch = Vec::new();
+            for _ in 0..21 {
+                if args.cold {
+                    host_sim::bench::flush_caches();
+                }
+                let t = Instant::now();
+                for _ in 0..reps {
+                    std::hint::black_box(rm.query(&g, from, goal, &mut sc));
+                }
+                batch.push(t.elapsed().as_secs_f64() * 1e6 / f64::from(reps));
+            }
+            batch.sort_by(f64::total_cmp);
+            let us = batch[10];
+            let mut cell = format!("{}: {us:.2}", leg + 1);
+            if let Some(&(rc, opt)) = bench.get(&(s.name.clone(), leg + 1)) {
+                ratios.push(us / rc);
+                cell += &format!(" ({:.2})", us / rc);
+                if let Some(l) = len {
+                    cell += &format!(", {:.3}", f64::from(l) / opt);
+                }
+            }
+            if len.is_none() {
+                cell += ", none";
+            }
+            legs.push(cell);
+        }
+        ratios.sort_by(f64::total_cmp);
+        let summary = if ratios.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; median {:.2}, worst {:.2}",
+                (ratios[(ratios.len() - 1) / 2] + ratios[ratios.len() / 2]) / 2.0,
+                ratios[ratios.len() - 1]
+            )
+        };
+        println!(
+            "| {} | {} | {} | {} | {bake_ms:.0} | {}{summary} |",
+            s.name,
+            rm.nodes.len(),
+            rm.next.len() / 2,
+            rm.bytes(),
+            legs.join("; ")
+        );
+    }
+    Ok(())
+}
