@@ -76,7 +76,9 @@ impl Roadmap {
                 // corner (in cells): a bump of pixel noise has two short sides.
                 let (cx, cy) = (vx + (d.0 as i32 - 1) / 2, vy + (d.1 as i32 - 1) / 2);
                 let run = |sx: i32, sy: i32| {
-                    (0..wall).take_while(|&k| occ(cx + k * sx, cy + k * sy)).count() as i32
+                    (0..wall)
+                        .take_while(|&k| occ(cx + k * sx, cy + k * sy))
+                        .count() as i32
                 };
                 if wall > 1 && run(d.0 as i32, 0) < wall && run(0, d.1 as i32) < wall {
                     continue;
@@ -174,12 +176,19 @@ impl Roadmap {
             s.heap.push(Reverse((f.to_bits(), i)));
         }
         let mut best = f32::INFINITY;
+        s.pops = 0;
+        s.seen = (starts.len(), ends.len());
         while let Some(Reverse((f, i))) = s.heap.pop() {
+            s.pops += 1;
             if f32::from_bits(f) >= best {
                 break;
             }
             let i = usize::from(i);
             let di = s.dist[i];
+            // A stale entry (the node was reached more cheaply since): already expanded.
+            if f32::from_bits(f) > di + self.nodes[i].dist(goal) {
+                continue;
+            }
             best = best.min(di + s.to_goal[i]);
             let (a, b) = (self.first[i] as usize, self.first[i + 1] as usize);
             for &j in &self.next[a..b] {
@@ -202,6 +211,8 @@ struct Scratch {
     dist: Vec<f32>,
     to_goal: Vec<f32>,
     heap: BinaryHeap<Reverse<(u32, u16)>>,
+    pops: usize,
+    seen: (usize, usize),
 }
 
 /// Whether the line along `e` through a corner node does not cut into the corner's occupied
@@ -252,6 +263,9 @@ struct Args {
     /// (drops the corners of pixel noise on fine maps).
     #[arg(long)]
     wall_m: Option<f32>,
+    /// Print each query's A* pops and how many nodes start and goal see (stderr).
+    #[arg(long)]
+    verbose: bool,
     /// Flush the caches (as `bench --cold`) before each query, timed alone (21 of them).
     #[arg(long)]
     cold: bool,
@@ -303,6 +317,16 @@ fn main() -> Result<()> {
             }
             if len.is_none() {
                 cell += ", none";
+            }
+            if args.verbose {
+                eprintln!(
+                    "{} leg {}: pops {}, start sees {}, goal sees {}",
+                    s.name,
+                    leg + 1,
+                    sc.pops,
+                    sc.seen.0,
+                    sc.seen.1
+                );
             }
             legs.push(cell);
         }
