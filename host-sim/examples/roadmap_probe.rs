@@ -7,15 +7,20 @@
 //! start and goal to the nearest nodes they see, and runs A* (Euclidean heuristic).
 //!
 //! ```text
-//! cargo run --release -p host-sim --example roadmap_probe -- SCENARIOS [--bench DIR] [--maps a,b] [--block-m M]
+//! cargo run --release -p host-sim --example roadmap_probe -- SCENARIOS [--bench DIR] \
+//!     [--maps a,b] [--cold] [--hull-m M --max-angle A] [--wall-m M] [--block-m M]
 //! ```
 //!
 //! With `--bench` (a `host-sim bench ... --ompl` output of the same scenarios), each leg's
 //! query time is divided by RRT-Connect's median first-solution time there, and each path by
 //! the leg's optimum. Times are warm (the median of 21 batches of 1,000 runs of the same
-//! query). `--block-m` keeps one corner per square block of that side (fewer nodes on
-//! fine maps, at the price of completeness). `--cold` flushes the caches before each query
-//! (as `bench --cold`) and times it alone. Findings: docs/performance.md, "A baked roadmap".
+//! query). `--block-m` keeps one corner per square block of that side (fewer nodes on fine
+//! maps, at the price of completeness); `--wall-m` keeps corners with a side at least that
+//! long; `--hull-m M --max-angle A` keeps corners that are vertices of the obstacle's outline
+//! at the scale of M metres, at least 2 cells (the occupied cells within it span less than A
+//! degrees).
+//! `--cold` flushes the caches before each query (as `bench --cold`) and times it alone.
+//! Findings: docs/performance.md, "A baked roadmap".
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
@@ -41,15 +46,17 @@ struct Roadmap {
 }
 
 impl Roadmap {
-    fn bake(g: &OccupancyGrid<'_>, block_m: Option<f32>, wall_m: Option<f32>) -> Self {
+    fn bake(g: &OccupancyGrid<'_>, thin: &Thin) -> Self {
         let cell = g.cell_size();
         let (cols, rows) = (i32::from(g.cols()), i32::from(g.rows()));
         let occ = |c: i32, r: i32| {
             c < 0 || r < 0 || c >= cols || r >= rows || g.is_occupied(c as u16, r as u16)
         };
         let (mut nodes, mut into) = (Vec::new(), Vec::new());
-        let block = block_m.map_or(1, |m| ((m / cell).round() as i32).max(1));
-        let wall = wall_m.map_or(1, |m| ((m / cell).round() as i32).max(1));
+        let cells = |m: Option<f32>| m.map_or(1, |m| ((m / cell).round() as i32).max(1));
+        let (block, wall) = (cells(thin.block_m), cells(thin.wall_m));
+        let reach = thin.hull_m.map_or(1, |m| cells(Some(m)).max(2));
+        let widest = thin.max_angle_deg.to_radians();
         let mut taken = std::collections::HashSet::new();
         for vy in 1..rows {
             for vx in 1..cols {
@@ -82,6 +89,29 @@ impl Roadmap {
                 };
                 if wall > 1 && run(d.0 as i32, 0) < wall && run(0, d.1 as i32) < wall {
                     continue;
+                }
+                // A vertex of the obstacle's outline at the scale `reach`: the occupied cells
+                // within `reach` of the corner, seen from it, span less than `max_angle` (the
+                // middle steps of a staircase, a diagonal wall's pixels, span about 180).
+                if reach > 1 {
+                    let (mut lo, mut hi) = (0.0f32, 0.0f32);
+                    let mut wraps = false;
+                    for r in -reach..reach {
+                        for c in -reach..reach {
+                            let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
+                            if x * x + y * y > (reach * reach) as f32 || !occ(vx + c, vy + r) {
+                                continue;
+                            }
+                            // Angle from the corner's diagonal.
+                            let a = (d.0 * y - d.1 * x).atan2(d.0 * x + d.1 * y);
+                            wraps |= a.abs() > 0.95 * std::f32::consts::PI;
+                            lo = lo.min(a);
+                            hi = hi.max(a);
+                        }
+                    }
+                    if wraps || hi - lo > widest {
+                        continue;
+                    }
                 }
                 let key = (vx / block, vy / block);
                 if block > 1 && !taken.insert(key) {
@@ -166,6 +196,9 @@ impl Roadmap {
         s.dist.resize(self.nodes.len(), f32::INFINITY);
         s.to_goal.clear();
         s.to_goal.resize(self.nodes.len(), f32::INFINITY);
+        s.parent.clear();
+        s.parent.resize(self.nodes.len(), u16::MAX);
+        s.last = None;
         for &(i, d) in &ends {
             s.to_goal[usize::from(i)] = d;
         }
@@ -189,13 +222,17 @@ impl Roadmap {
             if f32::from_bits(f) > di + self.nodes[i].dist(goal) {
                 continue;
             }
-            best = best.min(di + s.to_goal[i]);
+            if di + s.to_goal[i] < best {
+                best = di + s.to_goal[i];
+                s.last = Some(i as u16);
+            }
             let (a, b) = (self.first[i] as usize, self.first[i + 1] as usize);
             for &j in &self.next[a..b] {
                 let ju = usize::from(j);
                 let nd = di + self.nodes[i].dist(self.nodes[ju]);
                 if nd < s.dist[ju] {
                     s.dist[ju] = nd;
+                    s.parent[ju] = i as u16;
                     let f = nd + self.nodes[ju].dist(goal);
                     s.heap.push(Reverse((f.to_bits(), j)));
                 }
@@ -203,6 +240,14 @@ impl Roadmap {
         }
         best.is_finite().then_some(best)
     }
+}
+
+/// How the corners are thinned (all off by default).
+struct Thin {
+    block_m: Option<f32>,
+    wall_m: Option<f32>,
+    hull_m: Option<f32>,
+    max_angle_deg: f32,
 }
 
 #[derive(Default)]
@@ -213,6 +258,22 @@ struct Scratch {
     heap: BinaryHeap<Reverse<(u32, u16)>>,
     pops: usize,
     seen: (usize, usize),
+    parent: Vec<u16>,
+    last: Option<u16>,
+}
+
+impl Scratch {
+    /// The roadmap nodes of the last query's path, start side first.
+    fn path(&self) -> Vec<u16> {
+        let mut v = Vec::new();
+        let mut at = self.last;
+        while let Some(i) = at.filter(|_| v.len() <= self.parent.len()) {
+            v.push(i);
+            at = Some(self.parent[usize::from(i)]).filter(|&p| p != u16::MAX);
+        }
+        v.reverse();
+        v
+    }
 }
 
 /// Whether the line along `e` through a corner node does not cut into the corner's occupied
@@ -263,6 +324,14 @@ struct Args {
     /// (drops the corners of pixel noise on fine maps).
     #[arg(long)]
     wall_m: Option<f32>,
+    /// Keep only corners that are vertices of the obstacle's outline at this scale, in metres
+    /// and at least 2 cells (pixel noise and the steps of a drawn diagonal are at the scale of
+    /// a cell): the occupied cells within it span less than `--max-angle` seen from the corner.
+    #[arg(long)]
+    hull_m: Option<f32>,
+    /// The widest angle, in degrees, for `--hull-m`.
+    #[arg(long, default_value_t = 160.0)]
+    max_angle: f32,
     /// Print each query's A* pops and how many nodes start and goal see (stderr).
     #[arg(long)]
     verbose: bool,
@@ -285,7 +354,13 @@ fn main() -> Result<()> {
     for s in &scenarios {
         let g = s.map.grid();
         let t0 = Instant::now();
-        let rm = Roadmap::bake(&g, args.block_m, args.wall_m);
+        let thin = Thin {
+            block_m: args.block_m,
+            wall_m: args.wall_m,
+            hull_m: args.hull_m,
+            max_angle_deg: args.max_angle,
+        };
+        let rm = Roadmap::bake(&g, &thin);
         let bake_ms = t0.elapsed().as_secs_f64() * 1e3;
         let mut legs = Vec::new();
         let mut ratios = Vec::new();
@@ -309,7 +384,10 @@ fn main() -> Result<()> {
             let us = batch[10];
             let mut cell = format!("{}: {us:.2}", leg + 1);
             if let Some(&(rc, opt)) = bench.get(&(s.name.clone(), leg + 1)) {
-                ratios.push(us / rc);
+                // A query that found no path is no first solution: not a ratio.
+                if len.is_some() {
+                    ratios.push(us / rc);
+                }
                 cell += &format!(" ({:.2})", us / rc);
                 if let Some(l) = len {
                     cell += &format!(", {:.3}", f64::from(l) / opt);
@@ -319,6 +397,12 @@ fn main() -> Result<()> {
                 cell += ", none";
             }
             if args.verbose {
+                let path: Vec<String> = sc
+                    .path()
+                    .iter()
+                    .map(|&i| s.show(rm.nodes[usize::from(i)]))
+                    .collect();
+                eprintln!("{} leg {}: path {}", s.name, leg + 1, path.join(" "));
                 eprintln!(
                     "{} leg {}: pops {}, start sees {}, goal sees {}",
                     s.name,
@@ -331,7 +415,8 @@ fn main() -> Result<()> {
             legs.push(cell);
         }
         ratios.sort_by(f64::total_cmp);
-        let summary = if ratios.is_empty() {
+        let missed = legs.iter().filter(|l| l.ends_with("none")).count();
+        let mut summary = if ratios.is_empty() {
             String::new()
         } else {
             format!(
@@ -340,6 +425,9 @@ fn main() -> Result<()> {
                 ratios[ratios.len() - 1]
             )
         };
+        if missed > 0 {
+            summary += &format!("; NO PATH on {missed} legs");
+        }
         println!(
             "| {} | {} | {} | {} | {bake_ms:.0} | {}{summary} |",
             s.name,
