@@ -30,6 +30,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use bi_am_rrt::geometry::Point;
 use bi_am_rrt::map::OccupancyGrid;
+use host_sim::stats::median;
 
 /// Nodes stand this far (in cells) off their corner, along the corner's diagonal.
 const OFFSET_CELLS: f32 = 0.6;
@@ -283,27 +284,32 @@ fn tangent(e: (f32, f32), d: (f32, f32)) -> bool {
     along * along <= (e.0 * e.0 + e.1 * e.1) * 1.0001
 }
 
+/// The columns of a bench's `bench.csv` the probe reads.
+#[derive(serde::Deserialize)]
+struct BenchRow {
+    map: String,
+    leg: usize,
+    planner: String,
+    optimal_m: f64,
+    first_us: Option<f64>,
+}
+
 /// Per (map, leg): RRT-Connect's median first-solution time (us) and the leg's optimum (m).
 fn bench_figures(dir: &Path) -> Result<HashMap<(String, usize), (f64, f64)>> {
-    let text = std::fs::read_to_string(dir.join("bench.csv")).context("bench.csv")?;
-    let mut rdr = csv::Reader::from_reader(text.as_bytes());
+    let mut rdr = csv::Reader::from_path(dir.join("bench.csv")).context("bench.csv")?;
     let mut times: HashMap<(String, usize), (Vec<f64>, f64)> = HashMap::new();
-    for rec in rdr.records() {
-        let r = rec?;
-        if &r[2] != "OMPL RRT-Connect" || r[5].is_empty() {
-            continue;
+    for row in rdr.deserialize::<BenchRow>() {
+        let r = row?;
+        if let (true, Some(us)) = (r.planner == "OMPL RRT-Connect", r.first_us) {
+            let e = times
+                .entry((r.map, r.leg))
+                .or_insert((Vec::new(), r.optimal_m));
+            e.0.push(us);
         }
-        let e = times
-            .entry((r[0].to_string(), r[1].parse()?))
-            .or_insert((Vec::new(), r[4].parse()?));
-        e.0.push(r[5].parse()?);
     }
     Ok(times
         .into_iter()
-        .map(|(k, (mut t, opt))| {
-            t.sort_by(f64::total_cmp);
-            (k, (t[t.len() / 2], opt))
-        })
+        .filter_map(|(k, (mut t, opt))| median(&mut t).map(|m| (k, (m, opt))))
         .collect())
 }
 
@@ -364,6 +370,7 @@ fn main() -> Result<()> {
         let bake_ms = t0.elapsed().as_secs_f64() * 1e3;
         let mut legs = Vec::new();
         let mut ratios = Vec::new();
+        let mut missed = 0;
         let starts = host_sim::optimum::leg_starts(s);
         for (leg, (&from, &goal)) in starts.iter().zip(&s.goals).enumerate() {
             let mut sc = Scratch::default();
@@ -380,8 +387,7 @@ fn main() -> Result<()> {
                 }
                 batch.push(t.elapsed().as_secs_f64() * 1e6 / f64::from(reps));
             }
-            batch.sort_by(f64::total_cmp);
-            let us = batch[10];
+            let us = median(&mut batch).unwrap_or(f64::NAN);
             let mut cell = format!("{}: {us:.2}", leg + 1);
             if let Some(&(rc, opt)) = bench.get(&(s.name.clone(), leg + 1)) {
                 // A query that found no path is no first solution: not a ratio.
@@ -395,6 +401,7 @@ fn main() -> Result<()> {
             }
             if len.is_none() {
                 cell += ", none";
+                missed += 1;
             }
             if args.verbose {
                 let path: Vec<String> = sc
@@ -414,17 +421,10 @@ fn main() -> Result<()> {
             }
             legs.push(cell);
         }
-        ratios.sort_by(f64::total_cmp);
-        let missed = legs.iter().filter(|l| l.ends_with("none")).count();
-        let mut summary = if ratios.is_empty() {
-            String::new()
-        } else {
-            format!(
-                "; median {:.2}, worst {:.2}",
-                (ratios[(ratios.len() - 1) / 2] + ratios[ratios.len() / 2]) / 2.0,
-                ratios[ratios.len() - 1]
-            )
-        };
+        let worst = ratios.iter().copied().fold(f64::NAN, f64::max);
+        let mut summary = median(&mut ratios).map_or(String::new(), |m| {
+            format!("; median {m:.2}, worst {worst:.2}")
+        });
         if missed > 0 {
             summary += &format!("; NO PATH on {missed} legs");
         }
