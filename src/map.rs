@@ -262,15 +262,25 @@ impl<'a> OccupancyGrid<'a> {
             axis_index(p.y - M, self.height),
             axis_index(q.y + M, self.height),
         );
-        // x as a function of y is only used when the segment is not (nearly) horizontal, where
-        // the ratio is well conditioned; a flat segment spans its whole x-range in every row.
+        // x as a function of y is well conditioned when the segment is not (nearly) horizontal.
+        // A flat segment (rise under the margin) is cut at a row band's edges only where the
+        // cut is far from its ends, with the cut widened by the rounding of the cell-unit y's
+        // (a few ulps of the larger |y|, over the rise): where that error would be large, the
+        // piece is its whole x-range. Taking the whole x-range in every row it comes near made
+        // the test refuse sub-segments of segments it passed (issue 41's maze step).
         let steep = dy > M;
         let slope = if steep { dx / dy } else { 0.0 };
+        let slack = 4.0 * f32::EPSILON * p.y.abs().max(q.y.abs()).max(1.0);
         for row in row_lo..=row_hi {
+            let (band_lo, band_hi) = (row as f32 - M, row as f32 + 1.0 + M);
             let (x0, x1) = if steep {
-                let y0 = p.y.max(row as f32 - M);
-                let y1 = q.y.min(row as f32 + 1.0 + M);
+                let y0 = p.y.max(band_lo);
+                let y1 = q.y.min(band_hi);
                 (p.x + (y0 - p.y) * slope, p.x + (y1 - p.y) * slope)
+            } else if dy > 0.0 && (p.y < band_lo || q.y > band_hi) {
+                let t0 = ((band_lo - p.y - slack) / dy).clamp(0.0, 1.0);
+                let t1 = ((band_hi - p.y + slack) / dy).clamp(0.0, 1.0);
+                (p.x + dx * t0, p.x + dx * t1)
             } else {
                 (p.x, q.x)
             };
@@ -980,6 +990,42 @@ mod tests {
         // Vertical along x = 2 touches the right edge of (1, 1).
         assert!(!g.segment_free(Point::new(2.0, 0.5), Point::new(2.0, 3.5)));
         assert!(g.segment_free(Point::new(2.01, 0.5), Point::new(2.01, 3.5)));
+    }
+
+    /// Issue 41: on the MovingAI maze at 0.5 m the simulator counted a collision for goal 3's
+    /// call 666, a step from (99.72903, 50.000484) to (99.02903, 50.000843) that runs 0.48-0.84
+    /// mm above the wall cells' edge at y = 50 m. A nearly flat segment (its rise under the
+    /// contact margin) was tested against its whole x-range in every row it comes near, so
+    /// the wall cell (198, 99), which the segment passes 1.2 mm above, was found "touched"
+    /// though only the step's first 0.04 cells come within the margin, above the free cell
+    /// (199, 99). The longer segment the planner had checked passed; its sub-segment did not.
+    #[test]
+    fn regression_maze512_flat_step_graze() {
+        let (w, h) = (256u16, 128u16);
+        let mut buf = [0u8; OccupancyGrid::bytes_needed(256, 128)];
+        // Row 99 (y in [49.5, 50) m) is a wall up to column 198; column 199 is free.
+        pack_grid(&mut buf, w, h, |c, r| r == 99 && c <= 198).unwrap();
+        let g = OccupancyGrid::new(&buf, w, h, 0.5).unwrap();
+        let (a, b) = (
+            Point::new(99.72903, 50.000484),
+            Point::new(99.02903, 50.000843),
+        );
+        assert!(
+            g.segment_free(a, b),
+            "the step stays clear of the wall cell"
+        );
+        assert!(g.segment_free(b, a));
+        // The parent segment the planner tested (further along the same line) passes too.
+        let far = a + (b - a) * 1.5;
+        assert!(g.segment_free(a, far));
+        // Any piece of a segment that passes passes (sub-segments of the step).
+        for k in 1..20 {
+            let m = a.lerp(b, k as f32 / 20.0);
+            assert!(g.segment_free(a, m) && g.segment_free(m, b), "{k}");
+        }
+        // A flat segment that really comes within the margin of the wall cell is blocked.
+        let low = Point::new(99.3, 50.0001);
+        assert!(!g.segment_free(a, low));
     }
 
     /// Issue 7, case 3: a subnormal cell size (1e-40) was accepted and `1 / cell` was infinite.
