@@ -7,9 +7,11 @@
 //!    that moment, not at the end of the call);
 //! 4. the agent starts moving once the goal is in the tree and `wait` has passed, then moves
 //!    `speed` metres towards the current waypoint per call (stopping on it when closer);
-//! 5. every motion segment is checked against the map and the dynamic obstacles where they are: a
-//!    segment that is not free counts as a collision (the agent moves anyway, as a robot whose
-//!    planner failed would);
+//! 5. every motion segment is checked against the live cells and the dynamic obstacles where
+//!    they are, by exact distances rather than the planner's own test ([`Map::body_clear`]):
+//!    a segment along which the robot's disc (a point without a body) comes nearer an
+//!    occupied cell than its radius counts as a collision (the agent moves anyway, as a robot
+//!    whose planner failed would);
 //! 6. the run ends when the goal is in the tree and the agent stands on it, or after
 //!    `max_calls` calls (or, with `stop_when_found`, once the goal has joined the tree).
 
@@ -20,6 +22,8 @@ use rand_core::Rng;
 use crate::clock::Clock;
 use crate::error::InputError;
 use crate::geometry::Point;
+#[allow(unused_imports)] // the module docs link to it
+use crate::map::Map;
 use crate::metric::Metric;
 use crate::planner::{Planner, Progress};
 
@@ -122,7 +126,7 @@ where
                     res.cost_at_start = p.goal_cost.map(|c| c.length);
                 }
                 let step = agent.step_towards(p.waypoint, protocol.speed);
-                if !planner.map().free_now(agent, step) {
+                if !planner.map().body_clear(agent, step) {
                     res.collisions = res.collisions.saturating_add(1);
                 }
                 res.travelled += agent.dist(step);

@@ -359,6 +359,11 @@ pub struct Config {
     pub as_printed: AsPrinted,
     /// How the agent and the obstacles move ([`Motion::NONE`] unless stated).
     pub motion: Motion,
+    /// The robot's radius in metres (beyond the paper, which plans for a point: 0). The map
+    /// must be inflated for at least this radius ([`crate::Map::with_body`],
+    /// [`crate::Map::with_baked_body`]); the planner then keeps the whole disc clear of the
+    /// walls, the live cells and the dynamic discs (each grown by the map's radius).
+    pub robot_radius: f32,
 }
 
 impl Default for Config {
@@ -414,6 +419,7 @@ impl Config {
             },
             as_printed: AsPrinted::NONE,
             motion: Motion::NONE,
+            robot_radius: 0.0,
         }
     }
 
@@ -625,6 +631,10 @@ impl Config {
                     .iter()
                     .all(|v| v.is_finite() && *v >= 0.0),
                 ConfigError::Motion,
+            ),
+            (
+                self.robot_radius.is_finite() && self.robot_radius >= 0.0,
+                ConfigError::RobotRadius,
             ),
         ];
         match checks.iter().find(|(ok, _)| !ok) {

@@ -40,6 +40,17 @@ error_enum! {
         NoOverlay => "the map has no live overlay to edit",
         /// A live cell edit names a cell outside the grid.
         CellOutside => "cell outside the grid",
+        /// The robot's radius is NaN, infinite or negative.
+        BadRadius => "robot radius must be finite and not negative",
+        /// The robot's disc fits nowhere: every cell lies within its radius of an obstacle or
+        /// of the map's edge.
+        NoRoom => "no cell of the map has room for the robot's radius",
+        /// A baked configuration space (`Map::with_baked_body`) has another size or cell size
+        /// than the grid.
+        BodyMismatch => "the inflated grid's size or cell size differs from the map's grid",
+        /// Live cells on a map whose inflated grid is read-only (baked into flash): a body
+        /// with live cells needs the inflated grid in a buffer (`Map::with_body`).
+        BodyInFlash => "live cells with a robot body need the inflated grid in a RAM buffer (Map::with_body)",
     }
 }
 
@@ -52,6 +63,9 @@ error_enum! {
         OutOfBounds => "position outside the map",
         /// The position lies in (or within the safety margin of) an obstacle.
         InObstacle => "position inside an obstacle",
+        /// The position is free for a point but closer to a wall (or the map's edge) than the
+        /// robot's radius: the robot's disc does not fit there.
+        NoRoom => "position closer to a wall than the robot's radius",
         /// The assisting metric places the position at an infinite distance (cut off from the
         /// start's free region).
         Unreachable => "position unreachable from the start",
@@ -91,6 +105,8 @@ error_enum! {
         PGap => "p_gap must lie in [0, 1]",
         /// A [`crate::config::Motion`] field is NaN, infinite or negative.
         Motion => "the motion's speeds, period and horizon must be finite and not negative",
+        /// `robot_radius` is NaN, infinite or negative.
+        RobotRadius => "robot_radius must be finite and not negative",
     }
 }
 
@@ -109,6 +125,9 @@ pub enum SetupError {
     /// The metric was not made for this map: a diffusion table baked from another grid
     /// (`DiffusionTable::check_map`).
     Metric(crate::metric::TableError),
+    /// The configuration's `robot_radius` is larger than the radius the map's grid was
+    /// inflated for (`Map::with_body`, `Map::with_baked_body`; 0 without a body).
+    Body,
 }
 
 impl core::fmt::Display for SetupError {
@@ -117,6 +136,9 @@ impl core::fmt::Display for SetupError {
             Self::Config(e) => write!(f, "bad configuration: {e}"),
             Self::Start(e) => write!(f, "bad start: {e}"),
             Self::Metric(e) => write!(f, "metric does not fit the map: {e}"),
+            Self::Body => f.write_str(
+                "robot_radius exceeds the radius the map was inflated for (Map::with_body)",
+            ),
             Self::Map => {
                 f.write_str("map scale out of range: squared distances overflow or vanish in f32")
             }

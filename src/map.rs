@@ -63,6 +63,9 @@ pub struct OccupancyGrid<'a> {
     height: u16,
     cell: f32,
     inv_cell: f32,
+    /// The robot radius (metres) these cells were inflated for ([`inflate`]); 0 for a grid of
+    /// the world as it is.
+    inflation: f32,
 }
 
 impl<'a> OccupancyGrid<'a> {
@@ -99,7 +102,24 @@ impl<'a> OccupancyGrid<'a> {
             height,
             cell: cell_size,
             inv_cell: inv,
+            inflation: 0.0,
         })
+    }
+
+    /// Declares that these cells are already inflated for a robot of `radius` metres by the
+    /// rule of [`inflate`] (a grid that [`inflate`] wrote on the host, kept in flash: what
+    /// `host-sim export` writes). Errors for a radius that is NaN, infinite or negative.
+    pub const fn inflated_for(mut self, radius: f32) -> Result<Self, MapError> {
+        if !(radius.is_finite() && radius >= 0.0) {
+            return Err(MapError::BadRadius);
+        }
+        self.inflation = radius;
+        Ok(self)
+    }
+
+    /// The robot radius in metres these cells were inflated for (0: the world as it is).
+    pub const fn inflation(&self) -> f32 {
+        self.inflation
     }
 
     /// Width in cells.
@@ -377,6 +397,195 @@ where
     Ok(())
 }
 
+/// The disc rule of a robot body in cell units (module docs, "The robot's body"): cell `c` is
+/// marked when the closed squares of `c` and of an occupied cell lie less than the radius
+/// apart, `gap_cols^2 + gap_rows^2 < (radius / cell)^2` with `gap = max(|d| - 1, 0)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Disc {
+    /// `(radius / cell)^2`, widened by a relative 1e-6 so that rounding marks more, never less.
+    k2: f32,
+    /// Rows the rule reaches on each side.
+    reach: u16,
+}
+
+impl Disc {
+    fn new(radius: f32, cell: f32) -> Self {
+        let k = radius / cell;
+        let k2 = k * k * (1.0 + 1.0e-6);
+        Self {
+            k2,
+            reach: to_u16(sat_u32(libm::ceilf(crate::geometry::sqrt(k2)))),
+        }
+    }
+
+    /// How many columns the rule reaches on each side in a row `dr` rows away (`None`: none
+    /// of that row; a radius of 0 marks only the occupied cell itself).
+    fn half(&self, dr: u16) -> Option<u16> {
+        let gap = f32::from(dr.saturating_sub(1));
+        let room = self.k2 - gap * gap;
+        if room <= 0.0 {
+            return (dr == 0).then_some(0);
+        }
+        // The largest gap g with g^2 < room is ceil(sqrt(room)) - 1; columns up to g + 1 away.
+        Some(to_u16(sat_u32(libm::ceilf(crate::geometry::sqrt(room)))))
+    }
+
+    /// Whether cell `(col, row)` of a `width x height` grid is marked, with `occupied(row, c0,
+    /// c1)` telling whether any cell of a run is occupied (runs that reach past the grid's
+    /// edge count as occupied: the map's edge is a wall to the body).
+    fn marks(
+        &self,
+        col: u16,
+        row: u16,
+        width: u16,
+        height: u16,
+        occupied: &impl Fn(u16, u16, u16) -> bool,
+    ) -> bool {
+        (0..=self.reach).any(|dr| {
+            let Some(half) = self.half(dr) else {
+                return false;
+            };
+            let run = |r: Option<u16>| match (r, col.checked_sub(half), col.checked_add(half)) {
+                (Some(r), Some(c0), Some(c1)) if r < height && c1 < width => occupied(r, c0, c1),
+                _ => true,
+            };
+            run(row.checked_sub(dr)) || (dr > 0 && run(row.checked_add(dr)))
+        })
+    }
+
+    /// Writes the rule's marks for every cell of the box `[c0, r0, c1, r1]` into `out` (the
+    /// grid's layout): `cells x (2 reach + 1)` run tests.
+    fn mark_box(
+        &self,
+        out: &mut [u8],
+        width: u16,
+        height: u16,
+        bx: [u16; 4],
+        occupied: &impl Fn(u16, u16, u16) -> bool,
+    ) {
+        let [c0, r0, c1, r1] = bx;
+        for row in r0..=r1.min(height.saturating_sub(1)) {
+            for col in c0..=c1.min(width.saturating_sub(1)) {
+                let i = cell_index(col, row, width);
+                if let Some(b) = out.get_mut(i / 8) {
+                    let bit = 1u8 << (i % 8);
+                    if self.marks(col, row, width, height, occupied) {
+                        *b |= bit;
+                    } else {
+                        *b &= !bit;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The box grown by the rule's reach on every side, clipped to the grid.
+    fn grow(&self, bx: [u16; 4], width: u16, height: u16) -> [u16; 4] {
+        let [c0, r0, c1, r1] = bx;
+        [
+            c0.saturating_sub(self.reach),
+            r0.saturating_sub(self.reach),
+            c1.saturating_add(self.reach).min(width.saturating_sub(1)),
+            r1.saturating_add(self.reach).min(height.saturating_sub(1)),
+        ]
+    }
+}
+
+/// Whether any of the first `cells` bits of `bits` is clear (a free cell).
+fn any_free(bits: &[u8], cells: usize) -> bool {
+    let (full, rest) = (cells / 8, cells % 8);
+    bits.iter().take(full).any(|&b| b != 0xff)
+        || (rest > 0
+            && bits
+                .get(full)
+                .is_some_and(|&b| b | (0xffu8 << rest) != 0xff))
+}
+
+/// Inflates `grid` for a robot disc of `radius` metres into `out` (at least
+/// [`OccupancyGrid::bytes_needed`] bytes, the grid's layout) and returns the inflated grid
+/// (the robot's configuration space: a point there is free when the disc there touches no
+/// wall). The rule, in the module docs, is conservative at cell resolution: every point of a
+/// free inflated cell is at least `radius` from every occupied cell and from the map's edge.
+/// O(cells x (2 radius / cell + 3)) run tests, once (on the host at export time, or at boot
+/// into a RAM buffer). Errors for a radius that is NaN, infinite or negative, a short buffer,
+/// or a radius that leaves no free cell.
+pub fn inflate<'b>(
+    grid: &OccupancyGrid<'_>,
+    radius: f32,
+    out: &'b mut [u8],
+) -> Result<OccupancyGrid<'b>, MapError> {
+    inflate_live(grid, None, radius, out)
+}
+
+/// [`inflate`] of the live cells `grid XOR flip`.
+fn inflate_live<'b>(
+    grid: &OccupancyGrid<'_>,
+    flip: Option<&[u8]>,
+    radius: f32,
+    out: &'b mut [u8],
+) -> Result<OccupancyGrid<'b>, MapError> {
+    if !(radius.is_finite() && radius >= 0.0) {
+        return Err(MapError::BadRadius);
+    }
+    let (w, h) = (grid.cols(), grid.rows());
+    let n = OccupancyGrid::bytes_needed(w, h);
+    let Some(out) = out.get_mut(..n) else {
+        return Err(MapError::BufferTooShort);
+    };
+    let disc = Disc::new(radius, grid.cell_size());
+    // A disc wider than the map fits nowhere (and this bounds the work).
+    if disc.reach > w.max(h) {
+        return Err(MapError::NoRoom);
+    }
+    let occupied = |row: u16, c0: u16, c1: u16| match flip {
+        None => !grid.span_free(row, c0, c1),
+        Some(f) => !grid.span_free_xor(row, c0, c1, f),
+    };
+    let all = [0, 0, w.saturating_sub(1), h.saturating_sub(1)];
+    disc.mark_box(out, w, h, all, &occupied);
+    #[allow(clippy::arithmetic_side_effects)] // u16 * u16 fits usize
+    if !any_free(out, usize::from(w) * usize::from(h)) {
+        return Err(MapError::NoRoom);
+    }
+    let mut inflated = OccupancyGrid::new(out, w, h, grid.cell_size())?;
+    inflated.inflation = radius;
+    Ok(inflated)
+}
+
+/// Squared distance from segment `a-b` to the closed box `[lo, hi]` (0 when they meet).
+fn segment_box_dist_sq(a: Point, b: Point, lo: Point, hi: Point) -> f32 {
+    // Liang-Barsky clipping: do they meet?
+    let d = Point::new(b.x - a.x, b.y - a.y);
+    let (mut t0, mut t1) = (0.0f32, 1.0f32);
+    let mut meets = true;
+    for (p, q) in [
+        (-d.x, a.x - lo.x),
+        (d.x, hi.x - a.x),
+        (-d.y, a.y - lo.y),
+        (d.y, hi.y - a.y),
+    ] {
+        if p == 0.0 {
+            meets &= q >= 0.0;
+        } else if p < 0.0 {
+            t0 = t0.max(q / p);
+        } else {
+            t1 = t1.min(q / p);
+        }
+    }
+    if meets && t0 <= t1 {
+        return 0.0;
+    }
+    let box_dist_sq = |p: Point| {
+        let dx = (lo.x - p.x).max(p.x - hi.x).max(0.0);
+        let dy = (lo.y - p.y).max(p.y - hi.y).max(0.0);
+        dx * dx + dy * dy
+    };
+    [lo, Point::new(hi.x, lo.y), hi, Point::new(lo.x, hi.y)]
+        .into_iter()
+        .map(|c| segment_point_dist_sq(a, b, c))
+        .fold(box_dist_sq(a).min(box_dist_sq(b)), f32::min)
+}
+
 /// The cell index of coordinate `v` (in cells) on an axis of `len` cells: values below zero
 /// truncate to 0 like a clamped floor; the far side is clamped to the last cell.
 #[inline]
@@ -511,6 +720,8 @@ pub struct Obstacles<const K: usize> {
     /// Edge window in seconds and the obstacles' top speed past a prediction, in m/s.
     window: f32,
     bound: f32,
+    /// The robot's radius: every disc is kept grown by it ([`Obstacles::set_pad`]).
+    pad: f32,
 }
 
 impl<const K: usize> Default for Obstacles<K> {
@@ -527,7 +738,43 @@ impl<const K: usize> Obstacles<K> {
             next_id: 0,
             window: 0.0,
             bound: 0.0,
+            pad: 0.0,
         }
+    }
+
+    /// Grows every disc, present and to come, by the robot's `radius` (a circle of radius R
+    /// then blocks R + r: the tests below are the robot disc's). The planner sets it from its
+    /// map's body ([`Map::radius`]); non-finite or negative values count as 0. What
+    /// [`Obstacles::get`], [`Obstacles::iter`] and [`Obstacles::remove`] return is the disc as
+    /// given; [`Obstacles::as_slice`] holds the grown ones.
+    pub fn set_pad(&mut self, radius: f32) {
+        let radius = if radius.is_finite() && radius > 0.0 {
+            radius
+        } else {
+            0.0
+        };
+        let delta = radius - self.pad;
+        for (_, m) in self.items.iter_mut() {
+            m.circle.radius += delta;
+        }
+        self.pad = radius;
+    }
+
+    /// The robot's radius the discs are grown by.
+    pub fn pad(&self) -> f32 {
+        self.pad
+    }
+
+    /// `obstacle` grown by the pad.
+    fn padded(&self, mut obstacle: Moving) -> Moving {
+        obstacle.circle.radius += self.pad;
+        obstacle
+    }
+
+    /// A grown disc as given.
+    fn unpadded(&self, mut circle: Circle) -> Circle {
+        circle.radius -= self.pad;
+        circle
     }
 
     /// Sets the tree's edge window (seconds) and the obstacles' top speed past a prediction
@@ -564,6 +811,7 @@ impl<const K: usize> Obstacles<K> {
             id = ObstacleId(id.0.wrapping_add(1));
         }
         self.next_id = id.0.wrapping_add(1);
+        let obstacle = self.padded(obstacle);
         self.items
             .push((id, obstacle))
             .map_err(|_| ObstacleError::Full)?;
@@ -575,6 +823,7 @@ impl<const K: usize> Obstacles<K> {
         if !obstacle.is_valid() {
             return Err(ObstacleError::BadCircle);
         }
+        let obstacle = self.padded(obstacle);
         let slot = self
             .items
             .iter_mut()
@@ -591,25 +840,34 @@ impl<const K: usize> Obstacles<K> {
             .iter()
             .position(|(i, _)| *i == id)
             .ok_or(ObstacleError::UnknownId)?;
-        Ok(self.items.swap_remove(pos).1.circle)
+        let circle = self.items.swap_remove(pos).1.circle;
+        Ok(self.unpadded(circle))
     }
 
-    /// The disc of the obstacle with this id.
+    /// The disc of the obstacle with this id (as given, not grown by the pad).
     pub fn get(&self, id: ObstacleId) -> Option<Circle> {
         self.get_moving(id).map(|m| m.circle)
     }
 
-    /// What is known of the obstacle with this id.
+    /// What is known of the obstacle with this id (its disc as given).
     pub fn get_moving(&self, id: ObstacleId) -> Option<Moving> {
-        self.items.iter().find(|(i, _)| *i == id).map(|(_, m)| *m)
+        self.items
+            .iter()
+            .find(|(i, _)| *i == id)
+            .map(|(_, m)| Moving {
+                circle: self.unpadded(m.circle),
+                ..*m
+            })
     }
 
-    /// The discs present with their ids, in no particular order.
+    /// The discs present with their ids (as given), in no particular order.
     pub fn iter(&self) -> impl Iterator<Item = (ObstacleId, Circle)> + '_ {
-        self.items.iter().map(|(i, m)| (*i, m.circle))
+        self.items
+            .iter()
+            .map(|(i, m)| (*i, self.unpadded(m.circle)))
     }
 
-    /// The obstacles present with their ids and motion, as a slice.
+    /// The obstacles present with their ids and motion, as a slice (discs grown by the pad).
     pub fn as_slice(&self) -> &[(ObstacleId, Moving)] {
         &self.items
     }
@@ -697,15 +955,17 @@ pub struct Overlay<'a> {
 /// (a copyable view; [`Map::live`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Live<'a> {
-    grid: &'a OccupancyGrid<'a>,
+    /// The grid tested: the static grid, or with a robot body its inflated live cells.
+    grid: OccupancyGrid<'a>,
     /// The overlay's bits while it flips any cell.
     flip: Option<&'a [u8]>,
 }
 
 impl<'a> Live<'a> {
-    /// The static grid under the edits.
-    pub fn grid(&self) -> &'a OccupancyGrid<'a> {
-        self.grid
+    /// The grid under the edits (with a robot body: the inflated live cells, which hold
+    /// the edits already).
+    pub fn grid(&self) -> &OccupancyGrid<'a> {
+        &self.grid
     }
 
     /// [`OccupancyGrid::segment_free`] on the live cells (one copy of the code: it is called
@@ -764,12 +1024,31 @@ impl<'a> Live<'a> {
     }
 }
 
+/// Where the cells inflated for the robot's body live.
+#[derive(Debug)]
+enum Space<'a> {
+    /// Inflated on the host and kept read-only (flash): [`Map::with_baked_body`].
+    Baked(OccupancyGrid<'a>),
+    /// Inflated into a caller-owned buffer, and kept up to date with the live cells:
+    /// [`Map::with_body`].
+    Buffer(&'a mut [u8]),
+}
+
+/// The robot's body: its radius, its disc rule and its inflated cells.
+#[derive(Debug)]
+struct Body<'a> {
+    radius: f32,
+    disc: Disc,
+    space: Space<'a>,
+}
+
 /// The planner's world: a borrowed static grid, optionally a live [`Overlay`] of edited cells,
-/// and up to `K` dynamic circles.
+/// a robot body (the cells inflated for its radius), and up to `K` dynamic circles.
 #[derive(Debug)]
 pub struct Map<'a, const K: usize> {
     grid: OccupancyGrid<'a>,
     overlay: Option<Overlay<'a>>,
+    body: Option<Body<'a>>,
     obstacles: Obstacles<K>,
 }
 
@@ -779,8 +1058,58 @@ impl<'a, const K: usize> Map<'a, K> {
         Self {
             grid,
             overlay: None,
+            body: None,
             obstacles: Obstacles::new(),
         }
+    }
+
+    /// This world for a robot that is a disc of `radius` metres: the live cells are inflated
+    /// into `buffer` (caller-owned, at least [`OccupancyGrid::bytes_needed`] bytes; in RAM, as
+    /// live cell edits re-inflate it when they are submitted) by the rule of [`inflate`], and
+    /// every test of the map ([`Map::free_path`], [`Map::free_now`], [`Map::free_point`],
+    /// [`Map::live`]) is then the disc's. The dynamic circles grow by the radius when the
+    /// planner is made ([`Obstacles::set_pad`]). A radius of 0 leaves the map as it is.
+    /// Errors as [`inflate`] does.
+    pub fn with_body(mut self, radius: f32, buffer: &'a mut [u8]) -> Result<Self, MapError> {
+        let flip = self.overlay.as_ref().map(|o| &*o.bits);
+        inflate_live(&self.grid, flip, radius, &mut *buffer)?;
+        if radius > 0.0 {
+            let n = OccupancyGrid::bytes_needed(self.grid.cols(), self.grid.rows());
+            self.body = Some(Body {
+                radius,
+                disc: Disc::new(radius, self.grid.cell_size()),
+                space: Space::Buffer(buffer.get_mut(..n).ok_or(MapError::BufferTooShort)?),
+            });
+        }
+        Ok(self)
+    }
+
+    /// This world for a robot whose disc the grid `space` was inflated for on the host
+    /// ([`inflate`], then [`OccupancyGrid::inflated_for`]: `host-sim export` writes it), kept
+    /// read-only (flash). Live cell edits then need [`Map::with_body`] instead. Errors when
+    /// `space` differs from the grid in size or cell size.
+    pub fn with_baked_body(mut self, space: OccupancyGrid<'a>) -> Result<Self, MapError> {
+        let g = &self.grid;
+        if space.cols() != g.cols()
+            || space.rows() != g.rows()
+            || space.cell_size().to_bits() != g.cell_size().to_bits()
+        {
+            return Err(MapError::BodyMismatch);
+        }
+        let radius = space.inflation();
+        if radius > 0.0 {
+            self.body = Some(Body {
+                radius,
+                disc: Disc::new(radius, g.cell_size()),
+                space: Space::Baked(space),
+            });
+        }
+        Ok(self)
+    }
+
+    /// The robot's radius in metres the map is inflated for (0: a point).
+    pub fn radius(&self) -> f32 {
+        self.body.as_ref().map_or(0.0, |b| b.radius)
     }
 
     /// This world with live cell edits in `bits`, a caller-owned buffer of at least
@@ -801,16 +1130,25 @@ impl<'a, const K: usize> Map<'a, K> {
         Ok(self)
     }
 
-    /// The live cells: the grid with the overlay's edits.
+    /// The live cells: the grid with the overlay's edits, inflated for the robot's body.
     pub fn live(&self) -> Live<'_> {
-        Live {
-            grid: &self.grid,
-            flip: self
-                .overlay
-                .as_ref()
-                .filter(|o| o.flipped > 0)
-                .map(|o| &*o.bits),
+        if let Some(body) = &self.body {
+            let grid = match &body.space {
+                Space::Baked(g) => *g,
+                Space::Buffer(bits) => OccupancyGrid {
+                    bits,
+                    inflation: body.radius,
+                    ..self.grid
+                },
+            };
+            return Live { grid, flip: None };
         }
+        self.raw_live()
+    }
+
+    /// Whether the map carries a live overlay ([`Map::with_overlay`]).
+    pub fn has_overlay(&self) -> bool {
+        self.overlay.is_some()
     }
 
     /// Cells the overlay turned from free to occupied, now.
@@ -832,6 +1170,15 @@ impl<'a, const K: usize> Map<'a, K> {
         let Some(o) = self.overlay.as_mut() else {
             return Err(MapError::NoOverlay);
         };
+        if matches!(
+            self.body,
+            Some(Body {
+                space: Space::Baked(_),
+                ..
+            })
+        ) {
+            return Err(MapError::BodyInFlash);
+        }
         let (w, h) = (grid.cols(), grid.rows());
         if a.0 >= w || b.0 >= w || a.1 >= h || b.1 >= h {
             return Err(MapError::CellOutside);
@@ -870,6 +1217,28 @@ impl<'a, const K: usize> Map<'a, K> {
                     Some([x0, y0, x1, y1]) => [x0.min(col), y0.min(row), x1.max(col), y1.max(row)],
                 });
             }
+        }
+        // A body's inflated cells follow at once: every cell within the disc's reach of the
+        // edited rectangle is marked again from the live cells, and the planner re-tests the
+        // edges near that grown box.
+        if let (
+            Some(Body {
+                disc,
+                space: Space::Buffer(out),
+                ..
+            }),
+            true,
+        ) = (self.body.as_mut(), changed > 0)
+        {
+            let flip = &*o.bits;
+            let occupied = |row: u16, c0: u16, c1: u16| !grid.span_free_xor(row, c0, c1, flip);
+            let grown = disc.grow([c0, r0, c1, r1], w, h);
+            disc.mark_box(out, w, h, grown, &occupied);
+            let [g0, h0, g1, h1] = grown;
+            o.changed = Some(match o.changed {
+                None => grown,
+                Some([x0, y0, x1, y1]) => [x0.min(g0), y0.min(h0), x1.max(g1), y1.max(h1)],
+            });
         }
         Ok(changed)
     }
@@ -922,7 +1291,8 @@ impl<'a, const K: usize> Map<'a, K> {
 
     /// Validates a position given at the API edge: finite, inside the map, not in an obstacle
     /// (a dynamic one where it is now, or a marked cell, is not: a goal on a person's way is
-    /// still a goal).
+    /// still a goal), and with a body, with room for the disc among the static walls
+    /// ([`InputError::NoRoom`]).
     pub fn check_point(&self, p: Point) -> Result<(), InputError> {
         if !p.is_finite() {
             Err(InputError::NotFinite)
@@ -930,8 +1300,89 @@ impl<'a, const K: usize> Map<'a, K> {
             Err(InputError::OutOfBounds)
         } else if self.in_wall(p) || self.obstacles.contains_now(p) {
             Err(InputError::InObstacle)
+        } else if !self.static_room(p) {
+            Err(InputError::NoRoom)
         } else {
             Ok(())
+        }
+    }
+
+    /// Whether the body's disc fits at `p` among the static grid's walls (the inflated static
+    /// grid's point test, computed from the grid: live edits do not count).
+    fn static_room(&self, p: Point) -> bool {
+        let Some(body) = &self.body else {
+            return true;
+        };
+        let g = &self.grid;
+        let (w, h) = (g.cols(), g.rows());
+        let occupied = |row: u16, c0: u16, c1: u16| !g.span_free(row, c0, c1);
+        g.point_spans_free(p, |row, c0, c1| {
+            (c0..=c1).all(|col| !body.disc.marks(col, row, w, h, &occupied))
+        })
+    }
+
+    /// Whether a robot disc of the map's radius, moved along `a-b`, keeps that radius from
+    /// every occupied live cell and the map's edge and meets no dynamic disc where it is now:
+    /// exact distances from the segment to each cell's square (shrunk by 1e-4 cell, for the
+    /// rounding of a driven position), not the planner's inflated grid. With no body, whether
+    /// the point's segment stays out of every occupied cell's interior. The agent protocol
+    /// counts a move that fails it as a collision ([`crate::agent`]). O(cells of the
+    /// segment's box grown by the radius).
+    pub fn body_clear(&self, a: Point, b: Point) -> bool {
+        let g = &self.grid;
+        let r = self.radius();
+        let cell = g.cell_size();
+        let tau = 1.0e-4 * cell;
+        let inset = (r - tau).max(0.0);
+        let inside = |p: Point| {
+            p.is_finite()
+                && p.x >= inset
+                && p.y >= inset
+                && p.x <= g.width_m() - inset
+                && p.y <= g.height_m() - inset
+        };
+        if !inside(a) || !inside(b) || self.obstacles.blocks_now(a, b) {
+            return false;
+        }
+        let reach = r + cell;
+        let (lo, hi) = (
+            Point::new(a.x.min(b.x) - reach, a.y.min(b.y) - reach),
+            Point::new(a.x.max(b.x) + reach, a.y.max(b.y) + reach),
+        );
+        let (Some((c0, r0)), Some((c1, r1))) = (
+            g.cell_of(Point::new(lo.x.max(0.0), lo.y.max(0.0))),
+            g.cell_of(Point::new(hi.x.min(g.width_m()), hi.y.min(g.height_m()))),
+        ) else {
+            return false;
+        };
+        let live = self.raw_live();
+        let r2 = r * r;
+        (r0..=r1).all(|row| {
+            (c0..=c1).all(|col| {
+                if !live.is_occupied(col, row) {
+                    return true;
+                }
+                let (x, y) = (f32::from(col) * cell, f32::from(row) * cell);
+                let d2 = segment_box_dist_sq(
+                    a,
+                    b,
+                    Point::new(x + tau, y + tau),
+                    Point::new(x + cell - tau, y + cell - tau),
+                );
+                if r > 0.0 { d2 >= r2 } else { d2 > 0.0 }
+            })
+        })
+    }
+
+    /// The live cells as the world has them (the grid with the overlay's edits, no body).
+    fn raw_live(&self) -> Live<'_> {
+        Live {
+            grid: self.grid,
+            flip: self
+                .overlay
+                .as_ref()
+                .filter(|o| o.flipped > 0)
+                .map(|o| &*o.bits),
         }
     }
 }

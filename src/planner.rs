@@ -162,8 +162,8 @@ pub enum Wait {
     /// Every path the tree holds to the goal crosses a dynamic obstacle or a marked cell;
     /// rewiring looks for a way around (or the obstacle may leave).
     PathBlocked,
-    /// The agent stands inside a dynamic obstacle or a cell the live overlay marked: any
-    /// motion would cross it.
+    /// The agent stands inside a dynamic obstacle or an occupied live cell, or its body is
+    /// closer to one (or to a wall) than its radius: any motion would cross it.
     AgentInObstacle,
     /// A dynamic obstacle lies between the agent and every tree node it could go to.
     AgentBlocked,
@@ -303,12 +303,21 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !(w * w + h * h).is_finite() || dup_sq < f32::MIN_POSITIVE {
             return Err(SetupError::Map);
         }
+        // The map must be inflated for the body the configuration names (a larger radius is
+        // conservative); the dynamic discs then grow by the map's radius.
+        if cfg.robot_radius > map.radius() {
+            return Err(SetupError::Body);
+        }
         map.check_point(start)?;
-        metric.check_map(map.grid()).map_err(SetupError::Metric)?;
+        metric
+            .check_map(map.live().grid())
+            .map_err(SetupError::Metric)?;
         let side = cfg.search.e_max.max(map.grid().cell_size());
         let mut map = map;
         let m = &cfg.motion;
         map.obstacles_mut().set_sweep(m.horizon, m.obstacle_speed);
+        let radius = map.radius();
+        map.obstacles_mut().set_pad(radius);
         let Storage { forward, reverse } = storage;
         for store in [&mut *forward, &mut *reverse] {
             if !store.index.reshape(w, h, side) {
@@ -671,9 +680,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// 3,345 units of the cap. One unit is about 12 ns on the development machine and about
     /// 200 instructions on a Cortex-M4F.
     ///
-    /// Errors (doing nothing) when `agent` is not finite, outside the map or inside the
-    /// static map's obstacles ([`Map::in_wall`]); an agent inside a dynamic obstacle or a cell
-    /// the live overlay marked is not an error (it holds).
+    /// Errors (doing nothing) when `agent` is not finite, outside the map or, on a map without
+    /// live cells, inside the grid's walls ([`Map::in_wall`]: the grid never changes, so the
+    /// position is wrong). An agent inside a dynamic obstacle, in any occupied cell of a map
+    /// with live cells (a door may close on the robot), or with a body closer to a wall than
+    /// its radius is not an error: it holds ([`Wait::AgentInObstacle`]).
     pub fn plan<C: Clock + ?Sized>(
         &mut self,
         clock: &C,
@@ -685,7 +696,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if !self.map.grid().contains(agent) {
             return Err(InputError::OutOfBounds);
         }
-        if self.map.in_wall(agent) {
+        if self.map.in_wall(agent) && !self.map.has_overlay() {
             return Err(InputError::InObstacle);
         }
         // The call's budget starts now: anchoring and following the agent spend it too, and

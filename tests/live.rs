@@ -271,8 +271,9 @@ fn edges_through_a_door_close_and_reopen() {
     }
 }
 
-/// An agent standing in a cell the overlay marked holds (not an error); one in a wall cell the
-/// overlay cleared plans; a wall cell still in place is an error.
+/// An agent standing in a cell the overlay marked holds (not an error); so does one in a wall
+/// cell of a map with live cells (the cell may have closed on it), and it plans again once the
+/// overlay clears the cell.
 #[test]
 fn an_agent_in_a_marked_cell_holds() {
     let mut storage = Box::new(Storage::<N, B>::new());
@@ -291,13 +292,60 @@ fn an_agent_in_a_marked_cell_holds() {
     let pr = p.plan(&clock, agent).unwrap();
     assert_eq!(pr.waypoint, agent);
     assert_eq!(pr.status, Status::Waiting(Wait::AgentInObstacle), "{pr:?}");
-    // A wall cell is an error, until the overlay clears it.
+    // In a wall cell of a live map: holds, until the overlay clears it.
     let in_wall = Point::new(10.05, 5.0);
-    assert_eq!(p.plan(&clock, in_wall), Err(InputError::InObstacle));
+    let pr = p.plan(&clock, in_wall).unwrap();
+    assert_eq!(
+        (pr.waypoint, pr.status),
+        (in_wall, Status::Waiting(Wait::AgentInObstacle))
+    );
     p.set_cells((100, 40), (101, 60), false).unwrap();
     p.set_cells((cell.0 - 1, cell.1 - 1), (cell.0 + 1, cell.1 + 1), false)
         .unwrap();
-    assert!(p.plan(&clock, in_wall).is_ok());
+    let pr = p.plan(&clock, in_wall).unwrap();
+    assert_ne!(pr.status, Status::Waiting(Wait::AgentInObstacle), "{pr:?}");
+}
+
+/// Issue 41: a wall cell cleared with `set_cells(.., false)` and marked again while the agent
+/// stands on it made `plan` return `Err(InObstacle)` (the cell looked like the grid's own wall
+/// again), while a cell the grid never had occupied made it hold. A door closing on the robot
+/// is an everyday event: the agent holds, and says why, in both cases.
+#[test]
+fn regression_door_closing_on_the_agent_holds() {
+    let mut storage = Box::new(Storage::<N, B>::new());
+    let mut bits = overlay();
+    let mut p = planner(&mut storage, &mut bits, 3);
+    p.set_goal(GOAL).unwrap();
+    let clock = FakeClock::nanos().with_work_cost(30).with_step(10);
+    // Open a wall panel (x 10.0-10.2 m, y 4-6 m), stand in it, then close it again.
+    p.set_cells((100, 40), (101, 60), false).unwrap();
+    let in_panel = Point::new(10.05, 5.0);
+    assert!(p.plan(&clock, in_panel).is_ok());
+    p.set_cells((100, 40), (101, 60), true).unwrap();
+    let pr = p
+        .plan(&clock, in_panel)
+        .expect("a door closing on the agent is not an error");
+    assert_eq!(pr.waypoint, in_panel);
+    assert_eq!(pr.status, Status::Waiting(Wait::AgentInObstacle), "{pr:?}");
+    // A cell the grid never had occupied, marked under the agent: the same.
+    let open = Point::new(5.05, 5.05);
+    let c = p.map().grid().cell_of(open).unwrap();
+    p.set_cells(c, c, true).unwrap();
+    let pr = p.plan(&clock, open).unwrap();
+    assert_eq!(pr.status, Status::Waiting(Wait::AgentInObstacle), "{pr:?}");
+    // Without live cells the grid never changes: a position in its wall is an input error.
+    let mut storage2 = Box::new(Storage::<N, B>::new());
+    let mut fixed: P<'_, '_> = Planner::new(
+        &mut storage2,
+        Map::new(grid()),
+        Euclidean,
+        XorShiftRng::seed_from_u64(1),
+        config(),
+        START,
+    )
+    .unwrap();
+    fixed.set_goal(GOAL).unwrap();
+    assert_eq!(fixed.plan(&clock, in_panel), Err(InputError::InObstacle));
 }
 
 #[test]

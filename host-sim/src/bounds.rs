@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use anyhow::{Result, anyhow};
 use bi_am_rrt::clock::FakeClock;
-use bi_am_rrt::{Config, Map, Planner, RewireMode, Storage};
+use bi_am_rrt::{Config, Planner, RewireMode, Storage};
 use cpu_time::ThreadTime;
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -64,10 +64,13 @@ fn measure<const N: usize, const B: usize>(
     let sc = &prep.scenario;
     let mut p = Planner::<_, _, N, B, 8>::new(
         &mut storage,
-        Map::new(sc.map.grid()),
+        sc.planner_map()?,
         metric,
         XorShiftRng::seed_from_u64(1),
-        cfg,
+        Config {
+            robot_radius: sc.robot_radius,
+            ..cfg
+        },
         sc.start,
     )
     .map_err(|e| anyhow!("{e}"))?;

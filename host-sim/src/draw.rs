@@ -17,6 +17,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// Walls.
 const WALL: RGBColor = RGBColor(45, 45, 45);
+/// The cells a robot body's disc cannot enter (the inflated margin), faintly.
+const MARGIN: RGBColor = RGBColor(215, 215, 215);
 /// Forward tree edges.
 pub const FORWARD: RGBColor = RGBColor(140, 170, 230);
 /// Reverse tree edges.
@@ -103,6 +105,30 @@ fn nice_length(w: f64) -> f64 {
         .unwrap_or(p)
 }
 
+/// The runs of occupied cells along each row of `grid`, as rectangles in metres.
+fn runs(grid: &OccupancyGrid<'_>) -> Vec<[(f64, f64); 2]> {
+    let cell = f64::from(grid.cell_size());
+    let mut out = Vec::new();
+    for r in 0..grid.rows() {
+        let mut c = 0;
+        while c < grid.cols() {
+            if grid.is_occupied(c, r) {
+                let c0 = c;
+                while c < grid.cols() && grid.is_occupied(c, r) {
+                    c += 1;
+                }
+                out.push([
+                    (f64::from(c0) * cell, f64::from(r) * cell),
+                    (f64::from(c) * cell, f64::from(r + 1) * cell),
+                ]);
+            } else {
+                c += 1;
+            }
+        }
+    }
+    out
+}
+
 /// Draws pictures of one map at a fixed size.
 pub struct Painter<'g> {
     grid: OccupancyGrid<'g>,
@@ -111,6 +137,9 @@ pub struct Painter<'g> {
     map_px: (u32, u32),
     /// Wall rectangles (runs of occupied cells along each row), in metres.
     walls: Vec<[(f64, f64); 2]>,
+    /// The robot body's margin: rectangles of the inflated grid's runs, and the radius.
+    margin: Vec<[(f64, f64); 2]>,
+    radius: f64,
 }
 
 impl<'g> Painter<'g> {
@@ -118,31 +147,30 @@ impl<'g> Painter<'g> {
     pub fn new(grid: OccupancyGrid<'g>, target_px: u32) -> Self {
         let (wm, hm) = (f64::from(grid.width_m()), f64::from(grid.height_m()));
         let scale = (f64::from(target_px) / wm).max(0.5);
-        let cell = f64::from(grid.cell_size());
-        let mut walls = Vec::new();
-        for r in 0..grid.rows() {
-            let mut c = 0;
-            while c < grid.cols() {
-                if grid.is_occupied(c, r) {
-                    let c0 = c;
-                    while c < grid.cols() && grid.is_occupied(c, r) {
-                        c += 1;
-                    }
-                    walls.push([
-                        (f64::from(c0) * cell, f64::from(r) * cell),
-                        (f64::from(c) * cell, f64::from(r + 1) * cell),
-                    ]);
-                } else {
-                    c += 1;
-                }
-            }
-        }
         Self {
             grid,
             scale,
             map_px: ((wm * scale).ceil() as u32, (hm * scale).ceil() as u32),
-            walls,
+            walls: runs(&grid),
+            margin: Vec::new(),
+            radius: 0.0,
         }
+    }
+
+    /// A painter for a scenario's map, with its robot's body when it has one.
+    pub fn for_scenario(sc: &'g crate::maps::Scenario, target_px: u32) -> Self {
+        Self::new(sc.map.grid(), target_px).with_body(&sc.plan_grid(), sc.robot_radius)
+    }
+
+    /// This painter for a robot of `radius` metres whose inflated grid is `space`: the
+    /// margin the disc cannot enter is drawn faintly under the walls, and the agent as a
+    /// disc of its radius (never smaller than the usual ring).
+    pub fn with_body(mut self, space: &OccupancyGrid<'_>, radius: f32) -> Self {
+        if radius > 0.0 {
+            self.margin = runs(space);
+            self.radius = f64::from(radius);
+        }
+        self
     }
 
     /// Picture size in pixels (map, legend column, title bar).
@@ -243,6 +271,11 @@ impl<'g> Painter<'g> {
             Swatch::Disc(GOAL, 4),
         );
         add(!self.walls.is_empty(), "wall", Swatch::Square(WALL));
+        add(
+            !self.margin.is_empty(),
+            "no room for the robot",
+            Swatch::Square(MARGIN),
+        );
         let line = |c: RGBColor, w: u32| ShapeStyle::from(c).stroke_width(w);
         for (k, (name, sw)) in entries.iter().enumerate() {
             let y = 14 + 24 * k as i32;
@@ -329,15 +362,17 @@ impl<'g> Painter<'g> {
             }
             Ok(())
         };
-        // Map.
-        for [a, b] in &self.walls {
-            let (x0, y0) = (a.0.max(view.x0), a.1.max(view.y0));
-            let (x1, y1) = (b.0.min(view.x1), b.1.min(view.y1));
-            if x0 < x1 && y0 < y1 {
-                ok(area.draw(&Rectangle::new(
-                    [view.px_f(x0, y0), view.px_f(x1, y1)],
-                    WALL.filled(),
-                )))?;
+        // Map: the body's margin faintly, the walls over it.
+        for (rects, colour) in [(&self.margin, MARGIN), (&self.walls, WALL)] {
+            for [a, b] in rects {
+                let (x0, y0) = (a.0.max(view.x0), a.1.max(view.y0));
+                let (x1, y1) = (b.0.min(view.x1), b.1.min(view.y1));
+                if x0 < x1 && y0 < y1 {
+                    ok(area.draw(&Rectangle::new(
+                        [view.px_f(x0, y0), view.px_f(x1, y1)],
+                        colour.filled(),
+                    )))?;
+                }
             }
         }
         let (w, h) = view.px_f(view.x1, view.y1);
@@ -385,9 +420,18 @@ impl<'g> Painter<'g> {
         if let Some(a) = scene.agent
             && view.holds(a, 0.0)
         {
+            // A robot with a body: its disc to scale (translucent), under the usual ring.
+            let body_px = (self.radius * view.scale).round() as i32;
+            if self.radius > 0.0 {
+                ok(area.draw(&plotters::element::Circle::new(
+                    view.px(a),
+                    body_px.max(1),
+                    AGENT.mix(0.35).filled(),
+                )))?;
+            }
             ok(area.draw(&plotters::element::Circle::new(
                 view.px(a),
-                7,
+                7.max(body_px),
                 line(AGENT, 3),
             )))?;
         }

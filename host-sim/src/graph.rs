@@ -25,6 +25,40 @@ pub fn neighbour_offsets() -> Vec<(i32, i32)> {
     v
 }
 
+/// The connected components of the free cells (4-neighbours; the same components as the
+/// graph's edges give): per cell in row-major order, the label of its component (the index of
+/// the component's first cell), or `None` for an occupied cell.
+pub fn components(grid: &OccupancyGrid<'_>) -> Vec<Option<u32>> {
+    let (cols, rows) = (grid.cols() as usize, grid.rows() as usize);
+    let free = |i: usize| !grid.is_occupied((i % cols) as u16, (i / cols) as u16);
+    let mut comp = vec![None; cols * rows];
+    let mut stack = Vec::new();
+    for start in 0..cols * rows {
+        if comp[start].is_some() || !free(start) {
+            continue;
+        }
+        let label = Some(start as u32);
+        comp[start] = label;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            let (c, r) = (i % cols, i / cols);
+            let near = [
+                (c > 0).then(|| i - 1),
+                (c + 1 < cols).then_some(i + 1),
+                (r > 0).then(|| i - cols),
+                (r + 1 < rows).then_some(i + cols),
+            ];
+            for j in near.into_iter().flatten() {
+                if comp[j].is_none() && free(j) {
+                    comp[j] = label;
+                    stack.push(j);
+                }
+            }
+        }
+    }
+    comp
+}
+
 /// The grid graph (module docs).
 #[derive(Clone, Debug)]
 pub struct GridGraph {
@@ -70,37 +104,17 @@ impl GridGraph {
             true
         };
         let n_cells = (cols * rows) as usize;
-        // Components by flood fill, in row-major order of their first cell.
-        let mut comp = vec![u32::MAX; n_cells];
-        let (mut best_size, mut best_label) = (0usize, u32::MAX);
-        let mut stack = Vec::new();
-        for start in 0..n_cells {
-            let (c, r) = ((start as i32) % cols, (start as i32) / cols);
-            if comp[start] != u32::MAX || !free(c, r) {
-                continue;
-            }
-            let label = start as u32;
-            comp[start] = label;
-            stack.push(start as i32);
-            let mut size = 0;
-            while let Some(i) = stack.pop() {
-                size += 1;
-                let (c, r) = (i % cols, i / cols);
-                for &(dx, dy) in &offs {
-                    if edge(c, r, dx, dy) {
-                        let j = ((r + dy) * cols + c + dx) as usize;
-                        if comp[j] == u32::MAX {
-                            comp[j] = label;
-                            stack.push(j as i32);
-                        }
-                    }
-                }
-            }
-            if size > best_size {
-                best_size = size;
-                best_label = label;
-            }
+        let comp = components(grid);
+        // The largest component; ties go to the first found in row-major order.
+        let mut size = std::collections::HashMap::<u32, usize>::new();
+        for l in comp.iter().flatten() {
+            *size.entry(*l).or_default() += 1;
         }
+        let (best_label, best_size) = size
+            .into_iter()
+            .max_by_key(|&(l, n)| (n, std::cmp::Reverse(l)))
+            .unwrap_or((u32::MAX, 0));
+        let comp: Vec<u32> = comp.into_iter().map(|l| l.unwrap_or(u32::MAX)).collect();
         let mut node_of_cell = vec![u32::MAX; n_cells];
         let mut cell_of_node = Vec::with_capacity(best_size);
         for (i, &l) in comp.iter().enumerate() {

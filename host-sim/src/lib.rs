@@ -8,7 +8,7 @@
 //!
 //! Modules, one concern each: `maps` (PNG and ROS maps, scenario files, built-ins), `graph`
 //! (grid graph), `diffusion` and `bake` (metric tables), `metrics`, `optimum` (exact shortest
-//! paths), `clock`, `sim` (a scenario prepared for runs, one run under the protocol), `run`
+//! paths), `clearance` (a driven trail's distance from the walls), `clock`, `sim` (a scenario prepared for runs, one run under the protocol), `run`
 //! (one run drawn), `draw` (pictures), `experiment` (the matrix), `results` (results folders:
 //! rows, manifest, summary, merge), `report` (charts and the Markdown report), `stats`,
 //! `bench`, `soak`, `stress`, `bounds` and `growth` (measurements), `moving` (people walking
@@ -26,6 +26,7 @@ pub mod bake;
 pub mod bench;
 #[cfg(feature = "sim")]
 pub mod bounds;
+pub mod clearance;
 pub mod clock;
 #[cfg(feature = "sim")]
 pub mod diffusion;

@@ -47,6 +47,8 @@ enum Command {
         /// ... or a scenario from a file (with --scenario NAME).
         #[arg(long)]
         scenarios: Option<PathBuf>,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Scenario name in --scenarios.
         #[arg(long)]
         scenario: Option<String>,
@@ -98,6 +100,8 @@ enum Command {
         /// ... or a scenario from a file (with --scenario NAME).
         #[arg(long)]
         scenarios: Option<PathBuf>,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Scenario name in --scenarios.
         #[arg(long)]
         scenario: Option<String>,
@@ -130,6 +134,8 @@ enum Command {
         /// office_200).
         #[arg(long)]
         scenarios: PathBuf,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Comma-separated scenario names (default: all in the file).
         #[arg(long, value_delimiter = ',')]
         maps: Option<Vec<String>>,
@@ -266,6 +272,8 @@ enum Command {
         /// office_200).
         #[arg(long)]
         scenarios: PathBuf,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Comma-separated scenario names (default: all in the file).
         #[arg(long, value_delimiter = ',')]
         maps: Option<Vec<String>>,
@@ -324,6 +332,8 @@ enum Command {
         /// office_200).
         #[arg(long)]
         scenarios: PathBuf,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Scenario name in --scenarios.
         #[arg(long)]
         scenario: String,
@@ -382,6 +392,8 @@ enum Command {
         /// Scenario file (e.g. ../shared/maps/scenarios.toml); the built-in maps without it.
         #[arg(long)]
         scenarios: Option<PathBuf>,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Scenario names in --scenarios (comma-separated; all by default).
         #[arg(long, value_delimiter = ',')]
         maps: Option<Vec<String>>,
@@ -422,6 +434,8 @@ enum Command {
         /// Scenario file (TOML), or `builtin`.
         #[arg(long)]
         scenarios: PathBuf,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Scenario to export.
         #[arg(long)]
         scenario: String,
@@ -442,6 +456,8 @@ enum Command {
         /// Scenario file (TOML), or `builtin`.
         #[arg(long)]
         scenarios: PathBuf,
+        #[command(flatten)]
+        body: BodyArgs,
         /// Comma-separated scenario names (default: all in the file).
         #[arg(long, value_delimiter = ',')]
         maps: Option<Vec<String>>,
@@ -478,6 +494,29 @@ fn kind_of(k: KindArg) -> ElementKind {
 
 /// The diffusion table options shared by `experiment`, `bake` and `export`.
 #[derive(Args, Clone, Copy, Debug)]
+struct BodyArgs {
+    /// The robot's radius in metres: the map is inflated for its disc and every path keeps the
+    /// disc clear of the walls and obstacles (default: the scenario file's `robot_radius_m`,
+    /// else 0, a point).
+    #[arg(long, value_name = "METRES")]
+    robot_radius: Option<f32>,
+}
+
+impl BodyArgs {
+    /// The scenario for the robot this flag names (unchanged without it).
+    fn apply(&self, sc: maps::Scenario) -> Result<maps::Scenario> {
+        match self.robot_radius {
+            Some(r) => sc.with_robot_radius(r),
+            None => Ok(sc),
+        }
+    }
+
+    fn apply_all(&self, scs: Vec<maps::Scenario>) -> Result<Vec<maps::Scenario>> {
+        scs.into_iter().map(|s| self.apply(s)).collect()
+    }
+}
+
+#[derive(Args)]
 struct TableArgs {
     /// Diffusion table element type.
     #[arg(long, value_enum, default_value = "i16")]
@@ -544,6 +583,7 @@ fn main() -> Result<()> {
         Command::Run {
             builtin,
             scenarios,
+            body,
             scenario,
             planner,
             all_goals,
@@ -556,12 +596,13 @@ fn main() -> Result<()> {
             paper_lengths,
             pace,
         } => {
-            let mut sc = match (scenarios, scenario) {
+            let sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
                 (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
                 (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
                 (None, None) => maps::builtin_by_name(&builtin)?,
             };
+            let mut sc = body.apply(sc)?;
             sc.paper_lengths = paper_lengths;
             run::run(&RunArgs {
                 scenario: sc,
@@ -579,6 +620,7 @@ fn main() -> Result<()> {
         Command::Moving {
             builtin,
             scenarios,
+            body,
             scenario,
             kinds,
             seeds,
@@ -592,7 +634,7 @@ fn main() -> Result<()> {
                 (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
                 (None, None) => maps::builtin_by_name(&builtin)?,
             };
-            let prep = host_sim::sim::Prepared::new(sc);
+            let prep = host_sim::sim::Prepared::new(body.apply(sc)?);
             host_sim::moving::moving(
                 &prep,
                 &host_sim::moving::MovingArgs {
@@ -608,6 +650,7 @@ fn main() -> Result<()> {
         }
         Command::Experiment {
             scenarios,
+            body,
             maps: names,
             planners,
             repeats,
@@ -631,7 +674,7 @@ fn main() -> Result<()> {
             meet_all_pairs,
             obstacle,
         } => {
-            let mut scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            let mut scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
             for s in &mut scs {
                 s.paper_lengths = paper_lengths;
             }
@@ -750,6 +793,7 @@ fn main() -> Result<()> {
         }
         Command::Bench {
             scenarios,
+            body,
             maps: names,
             legs,
             planners,
@@ -768,7 +812,7 @@ fn main() -> Result<()> {
                 bail!("--budgets: every budget must be a positive number of seconds");
             }
             budgets.sort_by(f64::total_cmp);
-            let mut scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            let mut scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
             for s in &mut scs {
                 s.paper_lengths = paper_lengths;
             }
@@ -791,6 +835,7 @@ fn main() -> Result<()> {
         }
         Command::Soak {
             scenarios,
+            body,
             scenario,
             planner,
             minutes,
@@ -804,7 +849,7 @@ fn main() -> Result<()> {
             if !(minutes > 0.0 && goal_every > 0.0 && speed > 0.0) {
                 bail!("--minutes, --goal-every and --speed must be positive");
             }
-            let mut scs = maps::load_scenarios(&scenarios, Some(&[scenario]))?;
+            let mut scs = body.apply_all(maps::load_scenarios(&scenarios, Some(&[scenario]))?)?;
             let cfg = host_sim::bench::parse_variants(&planner)?
                 .into_iter()
                 .next()
@@ -842,6 +887,7 @@ fn main() -> Result<()> {
         ),
         Command::Frozen {
             scenarios,
+            body,
             maps: names,
             planner,
             calls,
@@ -850,6 +896,7 @@ fn main() -> Result<()> {
                 Some(file) => maps::load_scenarios(&file, names.as_deref())?,
                 None => maps::builtin_scenarios(),
             };
+            let scs = body.apply_all(scs)?;
             let base = experiment::parse_planners(&planner)?
                 .first()
                 .copied()
@@ -858,12 +905,13 @@ fn main() -> Result<()> {
         }
         Command::Export {
             scenarios,
+            body,
             scenario,
             out,
             table,
             flash_data,
         } => {
-            let sc = maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0);
+            let sc = body.apply(maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
             bake::export_command(&sc, &table.options(), &out, flash_data)
         }
         Command::Bake {
@@ -885,6 +933,7 @@ fn main() -> Result<()> {
         }
         Command::Growth {
             scenarios,
+            body,
             maps: names,
             planners,
             seconds,
@@ -892,7 +941,7 @@ fn main() -> Result<()> {
             seed,
             out,
         } => {
-            let scs = maps::load_scenarios(&scenarios, names.as_deref())?;
+            let scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
             host_sim::growth::growth(
                 &scs,
                 &experiment::parse_planners(&planners)?,

@@ -289,6 +289,12 @@ pub struct Scenario {
     /// Run the planners with Table 2's lengths in metres as printed instead of the lengths
     /// that follow the map ([`bi_am_rrt::Config::for_map`]; `--paper-lengths`).
     pub paper_lengths: bool,
+    /// The robot's radius in metres (0: a point; the file's `robot_radius_m`, or
+    /// `--robot-radius`): set it with [`Scenario::with_robot_radius`], which inflates the map.
+    pub robot_radius: f32,
+    /// The map inflated for the robot's disc ([`bi_am_rrt::map::inflate`]) when the radius is
+    /// not 0: the space the planner, the metrics and the exact optimum work in.
+    pub space: Option<OwnedGrid>,
 }
 
 #[derive(Deserialize)]
@@ -302,6 +308,9 @@ struct Entry {
     resolution_m: Option<f32>,
     #[serde(default)]
     sigma_m: Option<f32>,
+    /// The robot's radius in metres (default 0: a point).
+    #[serde(default)]
+    robot_radius_m: Option<f32>,
     start: [f32; 2],
     goals: Vec<[f32; 2]>,
 }
@@ -405,8 +414,10 @@ pub fn scenarios_from_str(
                 .unwrap_or(PAPER_SIGMA_M * bi_am_rrt::config::length_scale(wm.max(hm))),
             ros_origin,
             paper_lengths: false,
+            robot_radius: 0.0,
+            space: None,
         };
-        sc.validate()?;
+        let sc = sc.with_robot_radius(e.robot_radius_m.unwrap_or(0.0))?;
         out.push(sc);
     }
     Ok(out)
@@ -447,17 +458,104 @@ impl Scenario {
                 self.sigma
             );
         }
-        let map: bi_am_rrt::Map<'_, 0> = bi_am_rrt::Map::new(self.map.grid());
+        let map = self.planner_map::<0>()?;
+        let body = if self.robot_radius > 0.0 {
+            format!(" (a robot of radius {} m)", self.robot_radius)
+        } else {
+            String::new()
+        };
         let check = |what: String, p: Point| {
             map.check_point(p)
-                .map_err(|e| anyhow::anyhow!("scenario {name}: {what} {}: {e}", self.show(p)))
+                .map_err(|e| anyhow::anyhow!("scenario {name}: {what} {}: {e}{body}", self.show(p)))
         };
         check("start".into(), self.start)?;
         for (i, g) in self.goals.iter().enumerate() {
             check(format!("goal {}", i + 1), *g)?;
         }
+        if self.robot_radius > 0.0 {
+            // A goal the disc cannot reach (a passage narrower than its diameter) is refused
+            // here, with the leg named, rather than searched for in vain.
+            let space = self.plan_grid();
+            let parts = crate::graph::components(&space);
+            let part = |p: Point| {
+                space
+                    .cell_of(p)
+                    .and_then(|(c, r)| parts[cell_at(&space, c, r)])
+            };
+            let mut from = ("the start".to_string(), self.start);
+            for (i, &g) in self.goals.iter().enumerate() {
+                if part(from.1) != part(g) {
+                    bail!(
+                        "scenario {name}: goal {} {} cannot be reached from {} {} by a robot of \
+                         radius {} m: every way between them passes where the disc does not fit \
+                         (a passage narrower than {} m); give a smaller --robot-radius",
+                        i + 1,
+                        self.show(g),
+                        from.0,
+                        self.show(from.1),
+                        self.robot_radius,
+                        2.0 * self.robot_radius
+                    );
+                }
+                from = (format!("goal {}", i + 1), g);
+            }
+        }
         Ok(())
     }
+
+    /// This scenario for a robot of `radius` metres: the map inflated for its disc (kept in
+    /// [`Scenario::space`]), then checked ([`Scenario::validate`]: the start and goals need
+    /// room for the disc, and each leg a way it fits through).
+    pub fn with_robot_radius(mut self, radius: f32) -> Result<Self> {
+        if !(radius.is_finite() && radius >= 0.0) {
+            bail!(
+                "scenario {}: robot radius {radius} (must be a finite number of metres, not negative)",
+                self.name
+            );
+        }
+        self.robot_radius = radius;
+        self.space = if radius > 0.0 {
+            let g = self.map.grid();
+            let mut bits = vec![0u8; OccupancyGrid::bytes_needed(g.cols(), g.rows())];
+            bi_am_rrt::map::inflate(&g, radius, &mut bits).map_err(|e| {
+                anyhow::anyhow!("scenario {}: robot radius {radius} m: {e}", self.name)
+            })?;
+            Some(OwnedGrid {
+                bits,
+                ..self.map.clone()
+            })
+        } else {
+            None
+        };
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// The grid the planner works in: the map inflated for the robot's disc, or the map.
+    pub fn plan_map(&self) -> &OwnedGrid {
+        self.space.as_ref().unwrap_or(&self.map)
+    }
+
+    /// [`Scenario::plan_map`]'s core view, with the radius it was inflated for.
+    pub fn plan_grid(&self) -> OccupancyGrid<'_> {
+        let g = self.plan_map().grid();
+        g.inflated_for(self.robot_radius).unwrap_or(g)
+    }
+
+    /// The core's map of this scenario for its robot (with a body: the inflated grid, baked).
+    pub fn planner_map<const K: usize>(&self) -> Result<bi_am_rrt::Map<'_, K>> {
+        let map = bi_am_rrt::Map::new(self.map.grid());
+        if self.space.is_none() {
+            return Ok(map);
+        }
+        map.with_baked_body(self.plan_grid())
+            .map_err(|e| anyhow::anyhow!("scenario {}: {e}", self.name))
+    }
+}
+
+/// Row-major index of a cell.
+fn cell_at(g: &OccupancyGrid<'_>, c: u16, r: u16) -> usize {
+    usize::from(r) * usize::from(g.cols()) + usize::from(c)
 }
 
 /// Every built-in scenario (small and paper-sized), or the named ones in that order.
@@ -484,6 +582,8 @@ pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
         sigma: s.sigma,
         ros_origin: None,
         paper_lengths: false,
+        robot_radius: 0.0,
+        space: None,
     }
 }
 

@@ -619,9 +619,9 @@ fn one(
         let mut agent = prep.scenario.start;
         let mut trail = vec![agent];
         let mut contacts = vec![false; people.len()];
-        let painter = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 900));
+        let painter = pictures.map(|_| Painter::for_scenario(&prep.scenario, 900));
         // The GIF is smaller and shows no tree (the frames then compress well).
-        let small = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 560));
+        let small = pictures.map(|_| Painter::for_scenario(&prep.scenario, 560));
         let mut gif = animation(small.as_ref(), pictures, kind)?;
         let title = |call: u32| {
             format!(
@@ -752,7 +752,7 @@ fn door_one(
         let mut discs = Vec::new();
         let mut opened = false;
         let mut touching = false;
-        let small = pictures.map(|_| Painter::new(prep.scenario.map.grid(), 560));
+        let small = pictures.map(|_| Painter::for_scenario(&prep.scenario, 560));
         let mut gif = animation(small.as_ref(), pictures, kind)?;
         let shown = |s: &mut crate::draw::Scene, closed: bool| {
             if closed {
@@ -832,7 +832,7 @@ fn door_one(
         }
         row.travelled_ratio = travelled / optimum;
         if let Some((dir, _)) = pictures {
-            let painter = Painter::new(prep.scenario.map.grid(), 900);
+            let painter = Painter::for_scenario(&prep.scenario, 900);
             let mut s = scene(
                 p,
                 &trail,

@@ -243,7 +243,8 @@ pub fn leg_starts(s: &Scenario) -> Vec<Point> {
 /// again on the same scenario reads them back. Set `BIAMRRT_OPTIMA_CACHE=0` to search afresh.
 pub fn leg_optima(s: &Scenario) -> Vec<Option<f64>> {
     use rayon::prelude::*;
-    let grid = s.map.grid();
+    // For a robot disc, in the space inflated for it.
+    let grid = s.plan_grid();
     let legs: Vec<(Point, Point)> = leg_starts(s)
         .into_iter()
         .zip(s.goals.iter().copied())

@@ -103,6 +103,18 @@ fn join_scenes(
     })
 }
 
+/// One goal of `result.json`: the row, the robot's radius, the trail's clearance and the
+/// trail itself.
+#[derive(serde::Serialize)]
+struct GoalJson<'a> {
+    #[serde(flatten)]
+    row: &'a Row,
+    robot_radius_m: f32,
+    min_clearance_m: Option<f64>,
+    median_clearance_m: Option<f64>,
+    trail: Vec<[f64; 2]>,
+}
+
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
     // A Table 1 name, optionally with the bench's `@field=value` overrides.
@@ -138,6 +150,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         vec![0]
     };
     let mut trail = vec![prep.scenario.start];
+    // Each goal's driven trail, from where its leg began (result.json, clearance).
+    let mut legs: Vec<Vec<Point>> = vec![Vec::new(); prep.scenario.goals.len()];
     let mut disc = args.obstacle.map(crate::sim::DiscTrack::new);
     let mut avoided_drawn = false;
     let wall_clock = WallClock::new();
@@ -151,10 +165,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let call_end = std::cell::Cell::new(0u64);
     let mut pictures: Vec<String> = Vec::new();
     let out = args.out.clone();
-    let painter = Painter::new(prep.scenario.map.grid(), 800);
+    let painter = Painter::for_scenario(&prep.scenario, 800);
     let gif = out.join("run.gif");
     // Animation frames are smaller: a GIF of full-size frames runs to megabytes.
-    let small = Painter::new(prep.scenario.map.grid(), 480);
+    let small = Painter::for_scenario(&prep.scenario, 480);
     let mut animation = match args.animate {
         Some(_) => Some(Animation::new(&small, &gif, 80)?),
         None => None,
@@ -182,6 +196,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
             }
             if trail.last() != Some(&agent) {
                 trail.push(agent);
+            }
+            let leg = &mut legs[gi];
+            if leg.is_empty() {
+                leg.push(leg_starts[gi]);
+            }
+            if leg.last() != Some(&agent) {
+                leg.push(agent);
             }
             let mut save = |name: &str, s: &Scene| {
                 let r = painter.png(s, &out.join(name));
@@ -311,10 +332,27 @@ pub fn run(args: &RunArgs) -> Result<()> {
         used.rewiring.root_step,
         used.search.sigma
     );
-    for g in &rows {
-        let goal = prep.scenario.show(prep.scenario.goals[g.goal_index - 1]);
+    let raw = prep.scenario.map.grid();
+    let clearances: Vec<_> = rows
+        .iter()
+        .map(|g| crate::clearance::trail_clearance(&raw, &legs[g.goal_index - 1]))
+        .collect();
+    if prep.scenario.robot_radius > 0.0 {
         println!(
-            "  goal {} {goal}: reached {}, search time {}, travelled {:.2} m, exact optimum {}, {} collisions, {} nodes when found, {} plan calls",
+            "  robot radius {} m: the map inflated for its disc; the optimum is the inflated map's",
+            prep.scenario.robot_radius
+        );
+    }
+    for (g, c) in rows.iter().zip(&clearances) {
+        let goal = prep.scenario.show(prep.scenario.goals[g.goal_index - 1]);
+        let clear = c.map_or(String::new(), |c| {
+            format!(
+                ", clearance min {:.3} m / median {:.3} m",
+                c.min_m, c.median_m
+            )
+        });
+        println!(
+            "  goal {} {goal}: reached {}, search time {}, travelled {:.2} m, exact optimum {}, {} collisions{clear}, {} nodes when found, {} plan calls",
             g.goal_index,
             g.reached,
             g.search_time_s
@@ -349,9 +387,25 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(s) = prep.bake_seconds.get() {
         println!("  diffusion table baked in {s:.3} s");
     }
+    // Each row with the robot's radius, its clearance and the trail it drove (in the
+    // scenario's frame: a ROS map's, or metres from the top-left corner, y down).
+    let goals_json: Vec<GoalJson<'_>> = rows
+        .iter()
+        .zip(&clearances)
+        .map(|(row, c)| GoalJson {
+            row,
+            robot_radius_m: prep.scenario.robot_radius,
+            min_clearance_m: c.map(|c| c.min_m),
+            median_clearance_m: c.map(|c| c.median_m),
+            trail: legs[row.goal_index - 1]
+                .iter()
+                .map(|&p| prep.scenario.user_frame(p))
+                .collect(),
+        })
+        .collect();
     std::fs::write(
         args.out.join("result.json"),
-        serde_json::to_string_pretty(&rows)?,
+        serde_json::to_string_pretty(&goals_json)?,
     )?;
     pictures.push("final.png".into());
     pictures.push("final.svg".into());

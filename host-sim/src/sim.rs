@@ -69,7 +69,7 @@ impl Prepared {
     /// The grid graph (for the geodesic metric).
     pub fn graph(&self) -> Arc<GridGraph> {
         self.graph
-            .get_or_init(|| Arc::new(GridGraph::build(&self.scenario.map.grid())))
+            .get_or_init(|| Arc::new(GridGraph::build(&self.scenario.plan_grid())))
             .clone()
     }
 
@@ -86,7 +86,7 @@ impl Prepared {
             .get_or_init(|| {
                 let t0 = Instant::now();
                 // Verified once here (checksum included); `metric` borrows it again per run.
-                let r = bake_diffusion(&self.scenario.map, &Options::default(), &self.table)
+                let r = bake_diffusion(self.scenario.plan_map(), &Options::default(), &self.table)
                     .and_then(|b| match DiffusionTable::new(&b.table) {
                         Ok(_) => Ok(b),
                         Err(e) => Err(anyhow!("baked table rejected: {e}")),
@@ -183,7 +183,7 @@ pub fn with_planner_in<const N: usize, T>(
     start: bi_am_rrt::Point,
     f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
 ) -> Result<T> {
-    let map = Map::new(prep.scenario.map.grid());
+    let map = prep.scenario.planner_map()?;
     f(&mut planner_on(storage, prep, map, cfg, seed, start)?)
 }
 
@@ -199,7 +199,9 @@ fn planner_on<'s, 'm, const N: usize>(
     prep.scenario.validate()?;
     let metric = prep.metric(cfg.metric)?;
     let rng = XorShiftRng::seed_from_u64(seed);
-    Planner::new(storage, map, metric, rng, prep.config(cfg), start)
+    let mut cfg = prep.config(cfg);
+    cfg.robot_radius = prep.scenario.robot_radius;
+    Planner::new(storage, map, metric, rng, cfg, start)
         .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))
 }
 
@@ -212,10 +214,13 @@ pub fn with_live_planner<T>(
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
     let grid = prep.scenario.map.grid();
-    let mut overlay = vec![0u8; bi_am_rrt::OccupancyGrid::bytes_needed(grid.cols(), grid.rows())];
+    let n = bi_am_rrt::OccupancyGrid::bytes_needed(grid.cols(), grid.rows());
+    let (mut overlay, mut space) = (vec![0u8; n], vec![0u8; n]);
     let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
+    // With a body, the live cells re-inflate into `space` as they are edited.
     let map = Map::new(grid)
         .with_overlay(&mut overlay)
+        .and_then(|m| m.with_body(prep.scenario.robot_radius, &mut space))
         .map_err(|e| anyhow!("overlay: {e}"))?;
     let start = prep.scenario.start;
     f(&mut planner_on(&mut storage, prep, map, cfg, seed, start)?)
@@ -389,7 +394,9 @@ impl DiscTrack {
 /// rasterised to cells of at most 0.25 m (the map's cells split evenly) lying wholly inside
 /// it: at most the true optimum around the disc.
 pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<f64> {
-    let grid = s.map.grid();
+    // For a robot disc: the inflated map, and the disc grown by the robot's radius.
+    let grid = s.plan_grid();
+    let c = Circle::new(c.center, c.radius + s.robot_radius);
     let cell = grid.cell_size();
     let split = (cell / 0.25).ceil().max(1.0) as u32;
     let fine = cell / split as f32;

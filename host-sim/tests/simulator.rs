@@ -1325,6 +1325,8 @@ fn door_scenes_run_and_report() {
         sigma: 18.0,
         ros_origin: None,
         paper_lengths: false,
+        robot_radius: 0.0,
+        space: None,
     };
     let prep = host_sim::sim::Prepared::new(scenario);
     let rows = moving(
