@@ -63,9 +63,18 @@ fn seg_box(a: [f64; 2], b: [f64; 2], lo: [f64; 2], hi: [f64; 2]) -> f64 {
 fn clearance(occ: &[bool], w: usize, h: usize, cell: f64, a: Point, b: Point) -> f64 {
     let (a, b) = ([a.x as f64, a.y as f64], [b.x as f64, b.y as f64]);
     let (wm, hm) = (w as f64 * cell, h as f64 * cell);
-    let mut best = [a[0], a[1], b[0], b[1], wm - a[0], wm - b[0], hm - a[1], hm - b[1]]
-        .into_iter()
-        .fold(f64::INFINITY, f64::min);
+    let mut best = [
+        a[0],
+        a[1],
+        b[0],
+        b[1],
+        wm - a[0],
+        wm - b[0],
+        hm - a[1],
+        hm - b[1],
+    ]
+    .into_iter()
+    .fold(f64::INFINITY, f64::min);
     for (i, _) in occ.iter().enumerate().filter(|(_, o)| **o) {
         let lo = [(i % w) as f64 * cell, (i / w) as f64 * cell];
         best = best.min(seg_box(a, b, lo, [lo[0] + cell, lo[1] + cell]));
@@ -77,7 +86,10 @@ fn clearance(occ: &[bool], w: usize, h: usize, cell: f64, a: Point, b: Point) ->
 fn random_map(rng: &mut XorShiftRng, w: usize, h: usize, blocks: usize) -> Vec<bool> {
     let mut occ = vec![false; w * h];
     for _ in 0..blocks {
-        let (bw, bh) = (1 + rng.next_u32() as usize % 4, 1 + rng.next_u32() as usize % 4);
+        let (bw, bh) = (
+            1 + rng.next_u32() as usize % 4,
+            1 + rng.next_u32() as usize % 4,
+        );
         let (x, y) = (
             rng.next_u32() as usize % (w - bw),
             rng.next_u32() as usize % (h - bh),
@@ -138,7 +150,10 @@ fn inflation_follows_the_rule_by_independent_distances() {
                 let marked = inflated.is_occupied(c as u16, r as u16);
                 let own = occ[r * w + c];
                 if own || (radius > 0.0 && d < rf * (1.0 - 1e-5)) {
-                    assert!(marked, "case {case}: cell ({c}, {r}) at {d} m of r {rf} not marked");
+                    assert!(
+                        marked,
+                        "case {case}: cell ({c}, {r}) at {d} m of r {rf} not marked"
+                    );
                 }
                 if marked && !own {
                     assert!(
@@ -370,7 +385,10 @@ fn a_body_refuses_what_does_not_fit() {
     assert!(matches!(bad.err(), Some(SetupError::Config(_))));
     // A start next to the wall: free for a point, no room for the disc.
     let map = Map::<'_, 4>::new(grid).with_body(0.3, &mut space).unwrap();
-    assert_eq!(map.check_point(Point::new(4.75, 1.0)), Err(InputError::NoRoom));
+    assert_eq!(
+        map.check_point(Point::new(4.75, 1.0)),
+        Err(InputError::NoRoom)
+    );
     let r = P::new(
         &mut storage,
         map,

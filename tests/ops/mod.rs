@@ -247,13 +247,45 @@ fn drive<M: Metric, const N: usize, const B: usize>(
     b: &mut Bytes<'_>,
 ) -> Result<(), String> {
     let mut storage = Box::new(Storage::<N, B>::new());
-    let mut overlay = vec![0u8; OccupancyGrid::bytes_needed(grid.cols(), grid.rows())];
+    let n = OccupancyGrid::bytes_needed(grid.cols(), grid.rows());
+    let (mut overlay, mut space) = (vec![0u8; n], vec![0u8; n]);
     let map = if b.u8().is_multiple_of(2) {
         Map::<K>::new(grid)
             .with_overlay(&mut overlay)
             .map_err(|e| format!("overlay refused: {e}"))?
     } else {
         Map::<K>::new(grid)
+    };
+    // A robot body (issue 41): mostly none, else up to three cells, sometimes not valid (the
+    // map then stays a point's and the planner must refuse the configuration's radius).
+    let radius = match b.u8() % 8 {
+        0..=3 => 0.0,
+        4 => f32::NAN,
+        5 => -grid.cell_size(),
+        _ => b.unit() * 3.0 * grid.cell_size(),
+    };
+    let mut cfg = cfg;
+    cfg.robot_radius = radius;
+    let map = match map.with_body(radius, &mut space) {
+        Ok(m) => m,
+        Err(_) => {
+            // Refused by name (bad radius, or no room): a point's map cannot hold the body.
+            let plain = Map::<K>::new(grid);
+            if Planner::new(
+                &mut storage,
+                plain,
+                metric,
+                XorShiftRng::seed_from_u64(seed),
+                cfg,
+                start,
+            )
+            .is_ok()
+                && !(radius <= 0.0)
+            {
+                return Err(format!("a planner for radius {radius} on a point's map"));
+            }
+            return Ok(());
+        }
     };
     let rng = XorShiftRng::seed_from_u64(seed);
     let Ok(mut p) = Planner::new(&mut storage, map, metric, rng, cfg, start) else {
@@ -300,6 +332,14 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                         if pr.waypoint != agent && !p.map().free_now(agent, pr.waypoint) {
                             return Err(format!(
                                 "waypoint {:?} not reachable from {agent:?}: {pr:?}",
+                                pr.waypoint
+                            ));
+                        }
+                        // The body's own check, by exact distances to the live cells.
+                        if pr.waypoint != agent && !p.map().body_clear(agent, pr.waypoint) {
+                            return Err(format!(
+                                "waypoint {:?} brings the disc of {radius} m too near a wall \
+                                 from {agent:?}: {pr:?}",
                                 pr.waypoint
                             ));
                         }
