@@ -41,6 +41,7 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     storage: &mut Storage<N, B>,
     grid: OccupancyGrid<'_>,
     overlay: &mut [u8],
+    space: &mut [u8],
     metric: M,
 ) -> u32 {
     let mut cfg = black_box(Config::table1()[black_box(7usize) % 20]);
@@ -54,6 +55,12 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     let rng = XorShiftRng::seed_from_u64(black_box(1));
     // A live overlay (when the opaque buffer is long enough).
     let map = match Map::new(grid).with_overlay(overlay) {
+        Ok(m) => m,
+        Err(_) => Map::new(grid),
+    };
+    // A robot body: the live cells inflated into an opaque buffer (issue 41).
+    cfg.robot_radius = black_box(0.4);
+    let map = match map.with_body(cfg.robot_radius, space) {
         Ok(m) => m,
         Err(_) => Map::new(grid),
     };
@@ -90,6 +97,7 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     let live = p.map().live();
     let _ = black_box(live.is_occupied(cell(3), cell(4)) ^ live.segment_free(point(), point()));
     let _ = black_box(p.map().in_wall(point()) ^ live.point_free(point()));
+    let _ = black_box(p.map().body_clear(point(), point()) ^ p.map().check_point(point()).is_ok());
     let _ = run_to_goal(
         &mut p,
         &clock,
@@ -136,16 +144,40 @@ fn main() -> ! {
         });
         let mut storage = Storage::<32, 8>::new();
         let mut overlay = [0u8; 64];
+        let mut space = [0u8; 64];
+        // A grid inflated on its own, and declared baked.
+        let mut inflated = [0u8; 64];
+        if let Ok(i) = bi_am_rrt::map::inflate(&g, black_box(0.7), black_box(&mut inflated[..])) {
+            sink ^= i.is_occupied(black_box(3), black_box(4)) as u32;
+            if let Ok(m) = Map::<'_, 2>::new(g).with_baked_body(i) {
+                sink ^= m.free_point(point()) as u32;
+            }
+        }
+        sink ^= g
+            .inflated_for(black_box(0.2))
+            .map_or(0, |i| i.inflation().to_bits());
         if let Ok(t) = DiffusionTable::new(black_box(&table[..])) {
             let mut coords = [0f32; 4];
             sink ^= t.coordinates(point(), &mut coords) as u32;
             sink ^= t.distance(point(), point()).to_bits();
-            sink ^= exercise_planner(&mut storage, g, black_box(&mut overlay[..]), t);
+            sink ^= exercise_planner(
+                &mut storage,
+                g,
+                black_box(&mut overlay[..]),
+                black_box(&mut space[..]),
+                t,
+            );
         }
         if let Ok(t) = DiffusionTable::new_unverified(black_box(&table[..])) {
             sink ^= t.distance(point(), point()).to_bits();
         }
-        sink ^= exercise_planner(&mut storage, g, black_box(&mut overlay[..]), Euclidean);
+        sink ^= exercise_planner(
+            &mut storage,
+            g,
+            black_box(&mut overlay[..]),
+            black_box(&mut space[..]),
+            Euclidean,
+        );
     }
     // Tree and index on their own.
     let mut tree: Tree<16> = Tree::new();
