@@ -158,29 +158,61 @@ pub fn exported_mission<C: Clock>(
     clock: &C,
     core_hz: u32,
 ) -> bool {
-    let (Ok(grid), Ok(table)) = (
-        OccupancyGrid::new(
-            &scenario::GRID,
-            scenario::COLS,
-            scenario::ROWS,
-            scenario::CELL,
-        ),
-        DiffusionTable::new(&scenario::TABLE),
-    ) else {
-        hprintln!("scenario: bad grid or table in flash");
-        return false;
+    let grid = match OccupancyGrid::new(
+        &scenario::GRID,
+        scenario::COLS,
+        scenario::ROWS,
+        scenario::CELL,
+    ) {
+        Ok(g) => g,
+        Err(e) => {
+            hprintln!("scenario: the grid in flash refused: {}", e);
+            return false;
+        }
+    };
+    let table = match DiffusionTable::new(&scenario::TABLE) {
+        Ok(t) => t,
+        Err(e) => {
+            hprintln!("scenario: the table in flash refused: {}", e);
+            return false;
+        }
     };
     let mut overlay = [0u8; if DOOR { scenario::GRID.len() } else { 0 }];
     let map: Map<'_, 4> = if DOOR {
         match Map::new(grid).with_overlay(&mut overlay) {
             Ok(m) => m,
-            Err(_) => {
-                hprintln!("scenario: overlay refused");
+            Err(e) => {
+                hprintln!("scenario: overlay refused: {}", e);
                 return false;
             }
         }
     } else {
         Map::new(grid)
+    };
+    // A robot body: the grid `host-sim export --robot-radius` inflated, from flash (with the
+    // door's live cells, re-inflated into RAM as they change).
+    let radius = scenario::ROBOT_RADIUS;
+    let mut space_ram = [0u8; if DOOR { scenario::SPACE.len() } else { 0 }];
+    let map = if radius <= 0.0 {
+        Ok(map)
+    } else if DOOR {
+        map.with_body(radius, &mut space_ram)
+    } else {
+        OccupancyGrid::new(
+            &scenario::SPACE,
+            scenario::COLS,
+            scenario::ROWS,
+            scenario::CELL,
+        )
+        .and_then(|s| s.inflated_for(radius))
+        .and_then(|s| map.with_baked_body(s))
+    };
+    let map = match map {
+        Ok(m) => m,
+        Err(e) => {
+            hprintln!("scenario: the robot's inflated grid refused: {}", e);
+            return false;
+        }
     };
     // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
     // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
@@ -191,6 +223,7 @@ pub fn exported_mission<C: Clock>(
         base
     };
     let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
+    cfg.robot_radius = radius;
     let walkers = WALKERS;
     if WALKERS > 0 {
         cfg.motion = Motion {
@@ -202,9 +235,12 @@ pub fn exported_mission<C: Clock>(
     }
     let rng = XorShiftRng::seed_from_u64(1);
     let start = Point::new(scenario::START.0, scenario::START.1);
-    let Ok(mut planner) = Planner::new(storage, map, table, rng, cfg, start) else {
-        hprintln!("scenario: planner refused its start");
-        return false;
+    let mut planner = match Planner::new(storage, map, table, rng, cfg, start) {
+        Ok(p) => p,
+        Err(e) => {
+            hprintln!("scenario: planner refused: {}", e);
+            return false;
+        }
     };
     let first_goal = scenario::GOALS
         .first()

@@ -397,10 +397,16 @@ pub fn export_flash(
     table: &TableOptions,
     dir: &Path,
 ) -> Result<Exported> {
-    let baked = bake_diffusion(&sc.map, &Options::default(), table)?;
+    // With a robot body the table is baked on the space its disc can reach, and the inflated
+    // grid goes to flash beside the map's own (`SPACE`, `ROBOT_RADIUS`).
+    let baked = bake_diffusion(sc.plan_map(), &Options::default(), table)?;
     let error = table_error(&baked, 20_000, 1)?;
     let name = &sc.name;
+    let space: &[u8] = sc.space.as_ref().map_or(&[], |s| &s.bits);
     write_file(&dir.join(format!("{name}.grid")), &sc.map.bits)?;
+    if !space.is_empty() {
+        write_file(&dir.join(format!("{name}.space")), space)?;
+    }
     write_file(&dir.join(format!("{name}.table")), &baked.table)?;
     let pt = |p: bi_am_rrt::Point| format!("({:?}, {:?})", p.x, p.y);
     let goals: Vec<String> = sc.goals.iter().map(|&g| pt(g)).collect();
@@ -413,7 +419,9 @@ pub fn export_flash(
          /// Start position (x, y) in metres.\npub const START: (f32, f32) = {};\n\
          /// Goals in order.\npub const GOALS: [(f32, f32); {}] = [{}];\n\
          /// Connection distance of the two trees (m).\npub const SIGMA: f32 = {:?};\n\
+         /// The robot's radius (m; 0: a point).\npub const ROBOT_RADIUS: f32 = {:?};\n\
          /// The occupancy grid, bit-packed as `bi_am_rrt::map::pack_grid` does.\n{}\
+         /// The grid inflated for the robot's disc (`bi_am_rrt::map::inflate`; empty for a point).\n{}\
          /// The diffusion table (`bi_am_rrt::DiffusionTable::new`); max error {:.3e} over {} pairs, \
          largest distance {:.3e}.\n{}",
         sc.source,
@@ -425,7 +433,9 @@ pub fn export_flash(
         goals.len(),
         goals.join(", "),
         sc.sigma,
+        sc.robot_radius,
         static_array("GRID", &sc.map.bits),
+        static_array("SPACE", space),
         error.max_abs,
         error.pairs,
         error.max_distance,
@@ -437,7 +447,7 @@ pub fn export_flash(
     write_file(&dir.join("scenario.rs"), src.as_bytes())?;
     Ok(Exported {
         source,
-        grid_bytes: sc.map.bits.len(),
+        grid_bytes: sc.map.bits.len() + space.len(),
         table_bytes: baked.table.len(),
         error,
     })

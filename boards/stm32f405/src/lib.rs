@@ -128,8 +128,23 @@ pub fn planner(
     let base = if tuned { base.tuned() } else { base };
     let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
     cfg.motion = motion;
+    // A robot body: the grid `host-sim export --robot-radius` inflated, kept in flash.
+    cfg.robot_radius = scenario::ROBOT_RADIUS;
+    let map = if scenario::ROBOT_RADIUS > 0.0 {
+        OccupancyGrid::new(
+            &scenario::SPACE,
+            scenario::COLS,
+            scenario::ROWS,
+            scenario::CELL,
+        )
+        .and_then(|s| s.inflated_for(scenario::ROBOT_RADIUS))
+        .and_then(|s| Map::new(grid).with_baked_body(s))
+        .map_err(|_| BoardError::Scenario)?
+    } else {
+        Map::new(grid)
+    };
     let rng = XorShiftRng::seed_from_u64(1);
-    Planner::new(storage, Map::new(grid), table, rng, cfg, start()).map_err(|_| BoardError::Setup)
+    Planner::new(storage, map, table, rng, cfg, start()).map_err(|_| BoardError::Setup)
 }
 
 /// The scenario's start.
