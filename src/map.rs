@@ -260,11 +260,22 @@ impl<'a> OccupancyGrid<'a> {
 
     /// The traversal: for each grid row the segment (thickened by the contact margin) crosses,
     /// the contiguous run of columns `c0..=c1` it touches in that row.
-    fn for_each_span<F>(&self, a: Point, b: Point, mut f: F) -> ControlFlow<()>
+    #[inline(always)]
+    fn for_each_span<F>(&self, a: Point, b: Point, f: F) -> ControlFlow<()>
     where
         F: FnMut(u16, u16, u16) -> ControlFlow<()>,
     {
-        const M: f32 = CONTACT_MARGIN;
+        self.for_each_span_within(a, b, CONTACT_MARGIN, f)
+    }
+
+    /// [`Self::for_each_span`] with the segment thickened by `m` cells instead of the contact
+    /// margin (a robot body's exact test thickens it by its radius).
+    fn for_each_span_within<F>(&self, a: Point, b: Point, m: f32, mut f: F) -> ControlFlow<()>
+    where
+        F: FnMut(u16, u16, u16) -> ControlFlow<()>,
+    {
+        let margin = m;
+        let m = CONTACT_MARGIN;
         if !a.is_finite() || !b.is_finite() {
             return ControlFlow::Break(());
         }
@@ -275,12 +286,12 @@ impl<'a> OccupancyGrid<'a> {
             core::mem::swap(&mut p, &mut q);
         }
         let (dx, dy) = (q.x - p.x, q.y - p.y);
-        if q.y + M < 0.0 || p.y - M > self.height as f32 {
+        if q.y + margin < 0.0 || p.y - margin > self.height as f32 {
             return ControlFlow::Continue(());
         }
         let (row_lo, row_hi) = (
-            axis_index(p.y - M, self.height),
-            axis_index(q.y + M, self.height),
+            axis_index(p.y - margin, self.height),
+            axis_index(q.y + margin, self.height),
         );
         // x as a function of y is well conditioned when the segment is not (nearly) horizontal.
         // A flat segment (rise under the margin) is cut at a row band's edges only where the
@@ -288,11 +299,11 @@ impl<'a> OccupancyGrid<'a> {
         // (a few ulps of the larger |y|, over the rise): where that error would be large, the
         // piece is its whole x-range. Taking the whole x-range in every row it comes near made
         // the test refuse sub-segments of segments it passed (issue 41's maze step).
-        let steep = dy > M;
+        let steep = dy > m;
         let slope = if steep { dx / dy } else { 0.0 };
         let slack = 4.0 * f32::EPSILON * p.y.abs().max(q.y.abs()).max(1.0);
         for row in row_lo..=row_hi {
-            let (band_lo, band_hi) = (row as f32 - M, row as f32 + 1.0 + M);
+            let (band_lo, band_hi) = (row as f32 - margin, row as f32 + 1.0 + margin);
             let (x0, x1) = if steep {
                 let y0 = p.y.max(band_lo);
                 let y1 = q.y.min(band_hi);
@@ -304,7 +315,7 @@ impl<'a> OccupancyGrid<'a> {
             } else {
                 (p.x, q.x)
             };
-            let (lo, hi) = (x0.min(x1) - M, x0.max(x1) + M);
+            let (lo, hi) = (x0.min(x1) - margin, x0.max(x1) + margin);
             if hi < 0.0 || lo > self.width as f32 {
                 continue;
             }
@@ -397,37 +408,63 @@ where
     Ok(())
 }
 
-/// The disc rule of a robot body in cell units (module docs, "The robot's body"): cell `c` is
-/// marked when the closed squares of `c` and of an occupied cell lie less than the radius
-/// apart, `gap_cols^2 + gap_rows^2 < (radius / cell)^2` with `gap = max(|d| - 1, 0)`.
+/// A disc rule of a robot body in cell units (module docs, "The robot's body"). With the
+/// *cells* rule ([`inflate`]) cell `c` is marked when the closed squares of `c` and of an
+/// occupied cell lie less than the radius apart, `gap_cols^2 + gap_rows^2 < (radius / cell)^2`
+/// with `gap = max(|d| - 1, 0)`: every point of an unmarked cell has room for the disc. With
+/// the *centres* rule ([`inflate_centres`]) when the square of an occupied cell lies less than
+/// the radius from `c`'s centre, `gap = max(|d| - 1/2, 0)`: the centre has room.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Disc {
     /// `(radius / cell)^2`, widened by a relative 1e-6 so that rounding marks more, never less.
     k2: f32,
     /// Rows the rule reaches on each side.
     reach: u16,
+    /// The centres rule (else the cells rule).
+    centres: bool,
 }
 
 impl Disc {
     fn new(radius: f32, cell: f32) -> Self {
+        Self::with_rule(radius, cell, false)
+    }
+
+    fn with_rule(radius: f32, cell: f32, centres: bool) -> Self {
         let k = radius / cell;
         let k2 = k * k * (1.0 + 1.0e-6);
+        let k = crate::geometry::sqrt(k2);
+        // Rows whose gap is under k: the gap is d - 1 (cells) or d - 1/2 (centres).
+        let reach = if centres {
+            libm::ceilf(k + 0.5) - 1.0
+        } else {
+            libm::ceilf(k)
+        };
         Self {
             k2,
-            reach: to_u16(sat_u32(libm::ceilf(crate::geometry::sqrt(k2)))),
+            reach: to_u16(sat_u32(reach)),
+            centres,
         }
     }
 
     /// How many columns the rule reaches on each side in a row `dr` rows away (`None`: none
     /// of that row; a radius of 0 marks only the occupied cell itself).
     fn half(&self, dr: u16) -> Option<u16> {
-        let gap = f32::from(dr.saturating_sub(1));
+        let off = if self.centres { 0.5 } else { 1.0 };
+        let gap = (f32::from(dr) - off).max(0.0);
         let room = self.k2 - gap * gap;
         if room <= 0.0 {
             return (dr == 0).then_some(0);
         }
-        // The largest gap g with g^2 < room is ceil(sqrt(room)) - 1; columns up to g + 1 away.
-        Some(to_u16(sat_u32(libm::ceilf(crate::geometry::sqrt(room)))))
+        // Columns d with (d - off)^2 < room (or d = 0): d < off + sqrt(room), so up to
+        // ceil(sqrt(room)) for the cells rule and ceil(sqrt(room) + 1/2) - 1 for the centres
+        // (rounding there is covered by the widened k2).
+        let s = crate::geometry::sqrt(room);
+        let half = if self.centres {
+            libm::ceilf(s + 0.5) - 1.0
+        } else {
+            libm::ceilf(s)
+        };
+        Some(to_u16(sat_u32(half)))
     }
 
     /// Whether cell `(col, row)` of a `width x height` grid is marked, with `occupied(row, c0,
@@ -514,14 +551,29 @@ pub fn inflate<'b>(
     radius: f32,
     out: &'b mut [u8],
 ) -> Result<OccupancyGrid<'b>, MapError> {
-    inflate_live(grid, None, radius, out)
+    inflate_live(grid, None, radius, false, out)
 }
 
-/// [`inflate`] of the live cells `grid XOR flip`.
+/// The cells whose *centre* lies closer than `radius` metres to an occupied cell or the map's
+/// edge, into `out` (the centres rule, module docs): where a disc centred on a cell centre
+/// does not fit. Less conservative than [`inflate`] (a free cell may hold points nearer a wall
+/// than `radius`), so not a collision test: the grid to bake a metric table on, or to tell
+/// which places a disc can reach (its free cells connect where the disc passes, to within a
+/// cell). Errors as [`inflate`] does.
+pub fn inflate_centres<'b>(
+    grid: &OccupancyGrid<'_>,
+    radius: f32,
+    out: &'b mut [u8],
+) -> Result<OccupancyGrid<'b>, MapError> {
+    inflate_live(grid, None, radius, true, out)
+}
+
+/// [`inflate`] (or with `centres`, [`inflate_centres`]) of the live cells `grid XOR flip`.
 fn inflate_live<'b>(
     grid: &OccupancyGrid<'_>,
     flip: Option<&[u8]>,
     radius: f32,
+    centres: bool,
     out: &'b mut [u8],
 ) -> Result<OccupancyGrid<'b>, MapError> {
     if !(radius.is_finite() && radius >= 0.0) {
@@ -532,7 +584,7 @@ fn inflate_live<'b>(
     let Some(out) = out.get_mut(..n) else {
         return Err(MapError::BufferTooShort);
     };
-    let disc = Disc::new(radius, grid.cell_size());
+    let disc = Disc::with_rule(radius, grid.cell_size(), centres);
     // A disc wider than the map fits nowhere (and this bounds the work).
     if disc.reach > w.max(h) {
         return Err(MapError::NoRoom);
@@ -959,6 +1011,63 @@ pub struct Live<'a> {
     grid: OccupancyGrid<'a>,
     /// The overlay's bits while it flips any cell.
     flip: Option<&'a [u8]>,
+    /// With a robot body: the exact test a segment the inflated cells refuse gets.
+    exact: Option<Exact<'a>>,
+}
+
+/// A robot body's exact test (module docs, "The robot's body"): a segment is free when it lies
+/// in the map, keeps `reach` cells (the radius plus the contact margin) from the map's edge,
+/// and keeps `reach` from the square of every occupied live cell (Euclidean, in cell units).
+#[derive(Clone, Copy, Debug)]
+struct Exact<'a> {
+    /// The live cells as the world has them (no inflation).
+    raw: OccupancyGrid<'a>,
+    flip: Option<&'a [u8]>,
+    /// The radius in cells plus the contact margin.
+    reach: f32,
+}
+
+impl Exact<'_> {
+    fn segment_free(&self, a: Point, b: Point) -> bool {
+        let g = &self.raw;
+        if !g.contains(a) || !g.contains(b) {
+            return false;
+        }
+        let (p, q) = (
+            Point::new(a.x * g.inv_cell, a.y * g.inv_cell),
+            Point::new(b.x * g.inv_cell, b.y * g.inv_cell),
+        );
+        let (w, h, k) = (f32::from(g.cols()), f32::from(g.rows()), self.reach);
+        // The edge is a wall to the disc (a segment's nearest points to it are its ends).
+        if p.x.min(q.x) < k || p.y.min(q.y) < k || w - p.x.max(q.x) < k || h - p.y.max(q.y) < k {
+            return false;
+        }
+        let k2 = k * k;
+        g.for_each_span_within(a, b, k, |row, c0, c1| {
+            let free = match self.flip {
+                None => g.span_free(row, c0, c1),
+                Some(f) => g.span_free_xor(row, c0, c1, f),
+            };
+            // Only the occupied cells of a run the thick segment's box touches are measured.
+            let clear = free
+                || (c0..=c1).all(|col| {
+                    let occupied = match self.flip {
+                        None => !g.span_free(row, col, col),
+                        Some(f) => !g.span_free_xor(row, col, col, f),
+                    };
+                    let (x, y) = (f32::from(col), f32::from(row));
+                    !occupied
+                        || segment_box_dist_sq(p, q, Point::new(x, y), Point::new(x + 1.0, y + 1.0))
+                            >= k2
+                });
+            if clear {
+                ControlFlow::Continue(())
+            } else {
+                ControlFlow::Break(())
+            }
+        })
+        .is_continue()
+    }
 }
 
 impl<'a> Live<'a> {
@@ -970,21 +1079,25 @@ impl<'a> Live<'a> {
 
     /// [`OccupancyGrid::segment_free`] on the live cells (one copy of the code: it is called
     /// from many places, and the firmware's flash is counted).
+    /// With a robot body: free when the inflated cells pass it (the fast test), or else when
+    /// the exact test does (near walls).
     #[inline(never)]
     pub fn segment_free(&self, a: Point, b: Point) -> bool {
-        match self.flip {
+        let fast = match self.flip {
             None => self.grid.segment_free(a, b),
             Some(f) => self.grid.segment_free_xor(a, b, f),
-        }
+        };
+        fast || self.exact.is_some_and(|e| e.segment_free(a, b))
     }
 
-    /// [`OccupancyGrid::point_free`] on the live cells.
+    /// [`OccupancyGrid::point_free`] on the live cells (with a body, as `segment_free`).
     #[inline(never)]
     pub fn point_free(&self, p: Point) -> bool {
-        match self.flip {
+        let fast = match self.flip {
             None => self.grid.point_free(p),
             Some(f) => self.grid.point_free_xor(p, f),
-        }
+        };
+        fast || self.exact.is_some_and(|e| e.segment_free(p, p))
     }
 
     /// Whether cell `(col, row)` is occupied now (outside the grid: occupied).
@@ -1072,7 +1185,7 @@ impl<'a, const K: usize> Map<'a, K> {
     /// Errors as [`inflate`] does.
     pub fn with_body(mut self, radius: f32, buffer: &'a mut [u8]) -> Result<Self, MapError> {
         let flip = self.overlay.as_ref().map(|o| &*o.bits);
-        inflate_live(&self.grid, flip, radius, &mut *buffer)?;
+        inflate_live(&self.grid, flip, radius, false, &mut *buffer)?;
         if radius > 0.0 {
             let n = OccupancyGrid::bytes_needed(self.grid.cols(), self.grid.rows());
             self.body = Some(Body {
@@ -1105,6 +1218,16 @@ impl<'a, const K: usize> Map<'a, K> {
             });
         }
         Ok(self)
+    }
+
+    /// The grid and the body a metric table is baked for: the static grid, its
+    /// [`OccupancyGrid::inflation`] the body's radius (what `Planner::new` checks a table
+    /// against: [`crate::metric::map_hash`]).
+    pub fn metric_grid(&self) -> OccupancyGrid<'a> {
+        OccupancyGrid {
+            inflation: self.radius(),
+            ..self.grid
+        }
     }
 
     /// The robot's radius in metres the map is inflated for (0: a point).
@@ -1141,7 +1264,17 @@ impl<'a, const K: usize> Map<'a, K> {
                     ..self.grid
                 },
             };
-            return Live { grid, flip: None };
+            let raw = self.raw_live();
+            let exact = Exact {
+                raw: raw.grid,
+                flip: raw.flip,
+                reach: body.radius * self.grid.inv_cell + CONTACT_MARGIN,
+            };
+            return Live {
+                grid,
+                flip: None,
+                exact: Some(exact),
+            };
         }
         self.raw_live()
     }
@@ -1307,17 +1440,16 @@ impl<'a, const K: usize> Map<'a, K> {
         }
     }
 
-    /// Whether the body's disc fits at `p` among the static grid's walls (the inflated static
-    /// grid's point test, computed from the grid: live edits do not count).
+    /// Whether the body's disc fits at `p` among the static grid's walls (the exact test on
+    /// the grid: live edits do not count).
     fn static_room(&self, p: Point) -> bool {
-        let Some(body) = &self.body else {
-            return true;
-        };
-        let g = &self.grid;
-        let (w, h) = (g.cols(), g.rows());
-        let occupied = |row: u16, c0: u16, c1: u16| !g.span_free(row, c0, c1);
-        g.point_spans_free(p, |row, c0, c1| {
-            (c0..=c1).all(|col| !body.disc.marks(col, row, w, h, &occupied))
+        self.body.as_ref().is_none_or(|body| {
+            Exact {
+                raw: self.grid,
+                flip: None,
+                reach: body.radius * self.grid.inv_cell + CONTACT_MARGIN,
+            }
+            .segment_free(p, p)
         })
     }
 
@@ -1383,6 +1515,7 @@ impl<'a, const K: usize> Map<'a, K> {
                 .as_ref()
                 .filter(|o| o.flipped > 0)
                 .map(|o| &*o.bits),
+            exact: None,
         }
     }
 }

@@ -226,8 +226,28 @@ impl ElementKind {
 
 /// FNV-1a, 32 bits: the table checksum.
 pub fn fnv1a32(bytes: &[u8]) -> u32 {
-    bytes.iter().fold(0x811c_9dc5u32, |h, &b| {
-        (h ^ b as u32).wrapping_mul(0x0100_0193)
+    fnv1a32_more(0x811c_9dc5, bytes)
+}
+
+/// [`fnv1a32`] continued over more bytes from the hash `h` of those before.
+fn fnv1a32_more(h: u32, bytes: &[u8]) -> u32 {
+    bytes
+        .iter()
+        .fold(h, |h, &b| (h ^ b as u32).wrapping_mul(0x0100_0193))
+}
+
+/// The hash a table records of the map it was baked for (`TableHeader::map_hash`): FNV-1a of
+/// the grid's bits and, for a robot body (a grid of the world whose
+/// [`crate::map::OccupancyGrid::inflation`] is the body's radius: [`crate::Map::metric_grid`]),
+/// of the radius's bytes after them, so that a table baked for one body is refused for another.
+pub fn map_hash(grid: &crate::map::OccupancyGrid<'_>) -> Option<u32> {
+    let n = crate::map::OccupancyGrid::bytes_needed(grid.cols(), grid.rows());
+    let h = fnv1a32(grid.bits().get(..n)?);
+    let r = grid.inflation();
+    Some(if r > 0.0 {
+        fnv1a32_more(h, &r.to_le_bytes())
+    } else {
+        h
     })
 }
 
@@ -554,10 +574,7 @@ impl<'a> DiffusionTable<'a> {
                 libm::fabsf(ratio - libm::roundf(ratio)) <= 1e-3 * ratio && ratio >= 0.999
             }
         };
-        let hash_ok = h.map_hash.is_none_or(|m| {
-            let n = crate::map::OccupancyGrid::bytes_needed(grid.cols(), grid.rows());
-            grid.bits().get(..n).is_some_and(|b| fnv1a32(b) == m)
-        });
+        let hash_ok = h.map_hash.is_none_or(|m| map_hash(grid) == Some(m));
         if cell_ok && hash_ok && (h.cols, h.rows) == (cols, rows) {
             Ok(())
         } else {

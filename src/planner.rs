@@ -310,7 +310,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         map.check_point(start)?;
         metric
-            .check_map(map.live().grid())
+            .check_map(&map.metric_grid())
             .map_err(SetupError::Metric)?;
         let side = cfg.search.e_max.max(map.grid().cell_size());
         let mut map = map;

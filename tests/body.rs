@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::error::{InputError, MapError, SetupError};
-use bi_am_rrt::map::{inflate, pack_grid};
+use bi_am_rrt::map::{CONTACT_MARGIN, inflate, inflate_centres, pack_grid};
 use bi_am_rrt::{Circle, Config, Euclidean, Map, OccupancyGrid, Planner, Point, Storage};
 use proptest::prelude::*;
 use rand_core::{Rng, SeedableRng};
@@ -398,10 +398,19 @@ fn a_body_refuses_what_does_not_fit() {
         Point::new(4.75, 1.0),
     );
     assert_eq!(r.err(), Some(SetupError::Start(InputError::NoRoom)));
-    // The 1 m door is closed to a disc of 0.3 m at 0.5 m cells (the rule marks a cell on
-    // each side of a wall): the inflated grid has no free cell in column 10.
+    // The 1 m door (y 2-3 m): the cells rule closes it to any disc at 0.5 m cells (a cell on
+    // each side of a wall), but the exact test lets a 0.6 m disc through and stops a 1.1 m one.
+    let through = (Point::new(4.0, 2.5), Point::new(6.0, 2.5));
     let map = Map::<'_, 4>::new(grid).with_body(0.3, &mut space).unwrap();
     assert!((0..h).all(|r| map.live().grid().is_occupied(10, r)));
+    assert!(map.free_path(through.0, through.1));
+    assert!(!map.free_path(Point::new(4.0, 2.25), Point::new(6.0, 2.25)));
+    let map = Map::<'_, 4>::new(grid).with_body(0.55, &mut space).unwrap();
+    assert!(!map.free_path(through.0, through.1));
+    assert_eq!(
+        map.check_point(Point::new(5.25, 2.5)),
+        Err(InputError::NoRoom)
+    );
     // Live cells on a grid baked into flash need a RAM copy.
     let mut baked_bits = vec![0u8; bits.len()];
     let baked = inflate(&grid, 0.3, &mut baked_bits).unwrap();
@@ -453,4 +462,106 @@ fn circles_grow_by_the_radius() {
     let (a, b) = (Point::new(5.0, 11.45), Point::new(15.0, 11.45));
     assert!(p.map().free_path(a, b));
     assert_eq!(p.remove_obstacle(id), Ok(c));
+}
+
+/// The exact test, against this file's distances on random grids, radii and segments: a
+/// segment it passes keeps the radius from every occupied cell and the map's edge (sound),
+/// and one that keeps the radius plus twice the contact margin passes (complete to within
+/// the margin).
+#[test]
+fn the_exact_test_is_sound_and_complete_to_the_margin() {
+    let mut rng = XorShiftRng::seed_from_u64(4141);
+    let (mut passed, mut refused) = (0, 0);
+    for case in 0..200 {
+        let (w, h) = (30usize, 24usize);
+        let occ = random_map(&mut rng, w, h, 8);
+        let bits = packed(&occ, w as u16, h as u16);
+        let cell = [0.05f32, 0.25, 1.0][case % 3];
+        let radius = cell * (rng.next_u32() % 300) as f32 / 100.0;
+        let grid = OccupancyGrid::new(&bits, w as u16, h as u16, cell).unwrap();
+        let mut space = vec![0u8; bits.len()];
+        let Ok(map) = Map::<'_, 4>::new(grid).with_body(radius, &mut space) else {
+            continue;
+        };
+        let (wm, hm) = (grid.width_m(), grid.height_m());
+        for _ in 0..40 {
+            let pt = |rng: &mut XorShiftRng| {
+                Point::new(
+                    (rng.next_u32() % 10_000) as f32 / 10_000.0 * wm,
+                    (rng.next_u32() % 10_000) as f32 / 10_000.0 * hm,
+                )
+            };
+            // Mostly short segments (a few cells: they end near walls), some across the map.
+            let a = pt(&mut rng);
+            let far = pt(&mut rng);
+            let b = if rng.next_u32() % 4 == 0 {
+                far
+            } else {
+                a.lerp(far, 0.1)
+            };
+            let d = clearance(&occ, w, h, f64::from(cell), a, b);
+            let free = map.free_path(a, b);
+            if free {
+                passed += 1;
+                assert!(
+                    d >= f64::from(radius) - 1e-5 * f64::from(cell),
+                    "case {case}: {a:?}-{b:?} passed at {d} m for r {radius}"
+                );
+            } else {
+                refused += 1;
+                assert!(
+                    d < f64::from(radius) + 2.0 * f64::from(CONTACT_MARGIN * cell) + 1e-5,
+                    "case {case}: {a:?}-{b:?} refused at {d} m for r {radius}"
+                );
+            }
+        }
+    }
+    assert!(
+        passed > 500 && refused > 500,
+        "{passed} passed, {refused} refused"
+    );
+}
+
+/// The centres rule, stated independently: a cell is marked when its centre lies closer than
+/// the radius to an occupied cell's square or the map's edge, or it is occupied itself.
+#[test]
+fn the_centres_rule_by_independent_distances() {
+    let mut rng = XorShiftRng::seed_from_u64(42);
+    for case in 0..40 {
+        let (w, h) = (14 + case % 5, 11 + case % 4);
+        let occ = random_map(&mut rng, w, h, 5);
+        let cell = [0.1f32, 0.5, 1.0][case % 3];
+        let radius = cell * (rng.next_u32() % 300) as f32 / 100.0;
+        let bits = packed(&occ, w as u16, h as u16);
+        let g = OccupancyGrid::new(&bits, w as u16, h as u16, cell).unwrap();
+        let mut out = vec![0u8; bits.len()];
+        let Ok(reach) = inflate_centres(&g, radius, &mut out) else {
+            continue;
+        };
+        let (cf, rf) = (f64::from(cell), f64::from(radius));
+        for r in 0..h {
+            for c in 0..w {
+                let centre = [(c as f64 + 0.5) * cf, (r as f64 + 0.5) * cf];
+                let (wm, hm) = (w as f64 * cf, h as f64 * cf);
+                let mut d = [centre[0], centre[1], wm - centre[0], hm - centre[1]]
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min);
+                for (i, _) in occ.iter().enumerate().filter(|(_, o)| **o) {
+                    let lo = [(i % w) as f64 * cf, (i / w) as f64 * cf];
+                    d = d.min(seg_box(centre, centre, lo, [lo[0] + cf, lo[1] + cf]));
+                }
+                let marked = reach.is_occupied(c as u16, r as u16);
+                let own = occ[r * w + c];
+                if own || d < rf * (1.0 - 1e-5) {
+                    assert!(marked, "case {case}: ({c}, {r}) centre at {d} m, r {rf}");
+                }
+                if marked && !own {
+                    assert!(
+                        d < rf * (1.0 + 1e-5),
+                        "case {case}: ({c}, {r}) at {d} m, r {rf}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -98,10 +98,14 @@ pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) ->
     }
     // The table records the grid it was baked from.
     let n = bi_am_rrt::map::OccupancyGrid::bytes_needed(grid.width, grid.height);
+    // (A hash given by the caller, a robot body's, is kept: `Scenario::table_hash`.)
     let table = &TableOptions {
-        map_hash: Some(fnv1a32(
-            grid.bits.get(..n).context("grid shorter than its size")?,
-        )),
+        map_hash: match table.map_hash {
+            Some(h) => Some(h),
+            None => Some(fnv1a32(
+                grid.bits.get(..n).context("grid shorter than its size")?,
+            )),
+        },
         ..*table
     };
     let bar = indicatif::ProgressBar::new(4).with_style(
@@ -397,9 +401,14 @@ pub fn export_flash(
     table: &TableOptions,
     dir: &Path,
 ) -> Result<Exported> {
-    // With a robot body the table is baked on the space its disc can reach, and the inflated
-    // grid goes to flash beside the map's own (`SPACE`, `ROBOT_RADIUS`).
-    let baked = bake_diffusion(sc.plan_map(), &Options::default(), table)?;
+    // With a robot body the table is baked on where its disc can go (the centres rule), and
+    // the grid inflated by the cells rule, the planner's fast test, goes to flash beside the
+    // map's own (`SPACE`, `ROBOT_RADIUS`).
+    let table = &TableOptions {
+        map_hash: sc.table_hash(),
+        ..*table
+    };
+    let baked = bake_diffusion(sc.reach_map(), &Options::default(), table)?;
     let error = table_error(&baked, 20_000, 1)?;
     let name = &sc.name;
     let space: &[u8] = sc.space.as_ref().map_or(&[], |s| &s.bits);

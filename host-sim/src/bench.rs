@@ -411,7 +411,7 @@ fn ompl_leg(
     args: &BenchArgs,
 ) -> Result<Vec<BenchRow>> {
     // The same map as ours: with a robot body, the grid inflated for its disc.
-    let g = s.plan_map();
+    let g = s.reach_map();
     // The harness works in cells: the leg is handed over in cell units (the ratio to the
     // optimum, and OMPL's range of 0.2 x the extent, do not depend on the unit).
     let cell = f32::from_bits(g.cell_bits);

@@ -159,7 +159,7 @@ impl<'g> Painter<'g> {
 
     /// A painter for a scenario's map, with its robot's body when it has one.
     pub fn for_scenario(sc: &'g crate::maps::Scenario, target_px: u32) -> Self {
-        Self::new(sc.map.grid(), target_px).with_body(&sc.plan_grid(), sc.robot_radius)
+        Self::new(sc.map.grid(), target_px).with_body(&sc.reach_grid(), sc.robot_radius)
     }
 
     /// This painter for a robot of `radius` metres whose inflated grid is `space`: the

@@ -292,9 +292,13 @@ pub struct Scenario {
     /// The robot's radius in metres (0: a point; the file's `robot_radius_m`, or
     /// `--robot-radius`): set it with [`Scenario::with_robot_radius`], which inflates the map.
     pub robot_radius: f32,
-    /// The map inflated for the robot's disc ([`bi_am_rrt::map::inflate`]) when the radius is
-    /// not 0: the space the planner, the metrics and the exact optimum work in.
+    /// The map inflated for the robot's disc by the cells rule ([`bi_am_rrt::map::inflate`])
+    /// when the radius is not 0: the planner's fast test (its exact test reads the map).
     pub space: Option<OwnedGrid>,
+    /// The cells whose centre has room for the disc ([`bi_am_rrt::map::inflate_centres`]) when
+    /// the radius is not 0: where the disc can go, to within a cell, for the metric tables,
+    /// the exact optimum, OMPL and the check that every leg can be driven.
+    pub reach: Option<OwnedGrid>,
 }
 
 #[derive(Deserialize)]
@@ -416,6 +420,7 @@ pub fn scenarios_from_str(
             paper_lengths: false,
             robot_radius: 0.0,
             space: None,
+            reach: None,
         };
         let sc = sc.with_robot_radius(e.robot_radius_m.unwrap_or(0.0))?;
         out.push(sc);
@@ -475,7 +480,7 @@ impl Scenario {
         if self.robot_radius > 0.0 {
             // A goal the disc cannot reach (a passage narrower than its diameter) is refused
             // here, with the leg named, rather than searched for in vain.
-            let space = self.plan_grid();
+            let space = self.reach_grid();
             let parts = crate::graph::components(&space);
             let part = |p: Point| {
                 space
@@ -514,32 +519,50 @@ impl Scenario {
             );
         }
         self.robot_radius = radius;
-        self.space = if radius > 0.0 {
+        let inflated = |centres: bool| -> Result<Option<OwnedGrid>> {
+            if radius <= 0.0 {
+                return Ok(None);
+            }
             let g = self.map.grid();
             let mut bits = vec![0u8; OccupancyGrid::bytes_needed(g.cols(), g.rows())];
-            bi_am_rrt::map::inflate(&g, radius, &mut bits).map_err(|e| {
+            let rule = if centres {
+                bi_am_rrt::map::inflate_centres
+            } else {
+                bi_am_rrt::map::inflate
+            };
+            rule(&g, radius, &mut bits).map_err(|e| {
                 anyhow::anyhow!("scenario {}: robot radius {radius} m: {e}", self.name)
             })?;
-            Some(OwnedGrid {
+            Ok(Some(OwnedGrid {
                 bits,
                 ..self.map.clone()
-            })
-        } else {
-            None
+            }))
         };
+        self.space = inflated(false)?;
+        self.reach = inflated(true)?;
         self.validate()?;
         Ok(self)
     }
 
-    /// The grid the planner works in: the map inflated for the robot's disc, or the map.
-    pub fn plan_map(&self) -> &OwnedGrid {
-        self.space.as_ref().unwrap_or(&self.map)
+    /// Where the robot's disc can go, to within a cell ([`Scenario::reach`]), or the map.
+    pub fn reach_map(&self) -> &OwnedGrid {
+        self.reach.as_ref().unwrap_or(&self.map)
     }
 
-    /// [`Scenario::plan_map`]'s core view, with the radius it was inflated for.
-    pub fn plan_grid(&self) -> OccupancyGrid<'_> {
-        let g = self.plan_map().grid();
-        g.inflated_for(self.robot_radius).unwrap_or(g)
+    /// [`Scenario::reach_map`]'s core view.
+    pub fn reach_grid(&self) -> OccupancyGrid<'_> {
+        self.reach_map().grid()
+    }
+
+    /// The hash a diffusion table baked for this scenario's robot records
+    /// ([`bi_am_rrt::metric::map_hash`] of the map and the radius); `None` for a point (the
+    /// bake hashes the grid it is given).
+    pub fn table_hash(&self) -> Option<u32> {
+        if self.robot_radius <= 0.0 {
+            return None;
+        }
+        let g = self.map.grid().inflated_for(self.robot_radius).ok()?;
+        bi_am_rrt::metric::map_hash(&g)
     }
 
     /// The core's map of this scenario for its robot (with a body: the inflated grid, baked).
@@ -548,7 +571,14 @@ impl Scenario {
         if self.space.is_none() {
             return Ok(map);
         }
-        map.with_baked_body(self.plan_grid())
+        let Some(space) = &self.space else {
+            return Ok(map);
+        };
+        let space = space
+            .grid()
+            .inflated_for(self.robot_radius)
+            .map_err(|e| anyhow::anyhow!("scenario {}: {e}", self.name))?;
+        map.with_baked_body(space)
             .map_err(|e| anyhow::anyhow!("scenario {}: {e}", self.name))
     }
 }
@@ -584,6 +614,7 @@ pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
         paper_lengths: false,
         robot_radius: 0.0,
         space: None,
+        reach: None,
     }
 }
 

@@ -244,7 +244,7 @@ pub fn leg_starts(s: &Scenario) -> Vec<Point> {
 pub fn leg_optima(s: &Scenario) -> Vec<Option<f64>> {
     use rayon::prelude::*;
     // For a robot disc, in the space inflated for it.
-    let grid = s.plan_grid();
+    let grid = s.reach_grid();
     let legs: Vec<(Point, Point)> = leg_starts(s)
         .into_iter()
         .zip(s.goals.iter().copied())

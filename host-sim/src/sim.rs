@@ -69,7 +69,7 @@ impl Prepared {
     /// The grid graph (for the geodesic metric).
     pub fn graph(&self) -> Arc<GridGraph> {
         self.graph
-            .get_or_init(|| Arc::new(GridGraph::build(&self.scenario.plan_grid())))
+            .get_or_init(|| Arc::new(GridGraph::build(&self.scenario.reach_grid())))
             .clone()
     }
 
@@ -86,7 +86,12 @@ impl Prepared {
             .get_or_init(|| {
                 let t0 = Instant::now();
                 // Verified once here (checksum included); `metric` borrows it again per run.
-                let r = bake_diffusion(self.scenario.plan_map(), &Options::default(), &self.table)
+                // For a robot body: on where its disc can go, recording the map and radius.
+                let table = TableOptions {
+                    map_hash: self.scenario.table_hash(),
+                    ..self.table
+                };
+                let r = bake_diffusion(self.scenario.reach_map(), &Options::default(), &table)
                     .and_then(|b| match DiffusionTable::new(&b.table) {
                         Ok(_) => Ok(b),
                         Err(e) => Err(anyhow!("baked table rejected: {e}")),
@@ -395,7 +400,7 @@ impl DiscTrack {
 /// it: at most the true optimum around the disc.
 pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<f64> {
     // For a robot disc: the inflated map, and the disc grown by the robot's radius.
-    let grid = s.plan_grid();
+    let grid = s.reach_grid();
     let c = Circle::new(c.center, c.radius + s.robot_radius);
     let cell = grid.cell_size();
     let split = (cell / 0.25).ceil().max(1.0) as u32;

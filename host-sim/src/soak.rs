@@ -79,7 +79,7 @@ fn run_n<const N: usize>(args: &SoakArgs) -> Result<Vec<SoakRow>> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let prep = Prepared::with_table(args.scenario.clone(), args.table);
-    let corners = Corners::of(&prep.scenario.plan_grid());
+    let corners = Corners::of(&prep.scenario.reach_grid());
     with_planner_at::<N, _>(&prep, args.cfg, args.seed, prep.scenario.start, |planner| {
         drive(planner, args, &corners)
     })

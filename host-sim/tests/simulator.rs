@@ -1327,6 +1327,7 @@ fn door_scenes_run_and_report() {
         paper_lengths: false,
         robot_radius: 0.0,
         space: None,
+        reach: None,
     };
     let prep = host_sim::sim::Prepared::new(scenario);
     let rows = moving(

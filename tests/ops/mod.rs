@@ -280,7 +280,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                 start,
             )
             .is_ok()
-                && !(radius <= 0.0)
+                && radius != 0.0
             {
                 return Err(format!("a planner for radius {radius} on a point's map"));
             }
