@@ -492,23 +492,27 @@ fn kind_of(k: KindArg) -> ElementKind {
     }
 }
 
-/// The diffusion table options shared by `experiment`, `bake` and `export`.
+/// The robot's body, shared by every command that runs a planner.
 #[derive(Args, Clone, Copy, Debug)]
 struct BodyArgs {
-    /// The robot's radius in metres: the map is inflated for its disc and every path keeps the
-    /// disc clear of the walls and obstacles (default: the scenario file's `robot_radius_m`,
-    /// else 0, a point).
+    /// The robot's radius in metres: every path keeps the disc clear of the walls and
+    /// obstacles (default: the scenario file's `robot_radius_m`, else 0, a point).
     #[arg(long, value_name = "METRES")]
     robot_radius: Option<f32>,
+    /// Move a start or goal where the robot's disc has no room to the nearest position where
+    /// it has, and say how far (without it such a scenario is refused, naming that position).
+    #[arg(long)]
+    snap_to_room: bool,
 }
 
 impl BodyArgs {
-    /// The scenario for the robot this flag names (unchanged without it).
+    /// The scenario for the robot these flags name (unchanged without them).
     fn apply(&self, sc: maps::Scenario) -> Result<maps::Scenario> {
-        match self.robot_radius {
-            Some(r) => sc.with_robot_radius(r),
-            None => Ok(sc),
+        let radius = self.robot_radius.unwrap_or(sc.robot_radius);
+        if self.robot_radius.is_none() && !self.snap_to_room {
+            return Ok(sc);
         }
+        sc.with_body(radius, self.snap_to_room)
     }
 
     fn apply_all(&self, scs: Vec<maps::Scenario>) -> Result<Vec<maps::Scenario>> {
@@ -516,6 +520,7 @@ impl BodyArgs {
     }
 }
 
+/// The diffusion table options shared by `experiment`, `bake` and `export`.
 #[derive(Args)]
 struct TableArgs {
     /// Diffusion table element type.

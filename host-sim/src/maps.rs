@@ -470,8 +470,23 @@ impl Scenario {
             String::new()
         };
         let check = |what: String, p: Point| {
-            map.check_point(p)
-                .map_err(|e| anyhow::anyhow!("scenario {name}: {what} {}: {e}{body}", self.show(p)))
+            map.check_point(p).map_err(|e| {
+                // Where the disc would fit instead, when it is the body that does not.
+                let near = match e {
+                    bi_am_rrt::error::InputError::NoRoom => self
+                        .nearest_room(&map, p)
+                        .map(|q| {
+                            format!(
+                                "; the nearest position with room is {} ({:.3} m away)",
+                                self.show(q),
+                                p.dist(q)
+                            )
+                        })
+                        .unwrap_or_default(),
+                    _ => String::new(),
+                };
+                anyhow::anyhow!("scenario {name}: {what} {}: {e}{body}{near}", self.show(p))
+            })
         };
         check("start".into(), self.start)?;
         for (i, g) in self.goals.iter().enumerate() {
@@ -508,10 +523,38 @@ impl Scenario {
         Ok(())
     }
 
+    /// The nearest position to `p` (on a grid of a tenth of a cell, within 64 cells) where
+    /// `map` accepts a start or a goal.
+    fn nearest_room<const K: usize>(&self, map: &bi_am_rrt::Map<'_, K>, p: Point) -> Option<Point> {
+        let step = 0.1 * f32::from_bits(self.map.cell_bits);
+        let mut best: Option<Point> = None;
+        for ring in 1..=640i32 {
+            if best.is_some_and(|b| b.dist(p) <= ring as f32 * step) {
+                break;
+            }
+            for i in -ring..=ring {
+                for (dx, dy) in [(i, -ring), (i, ring), (-ring, i), (ring, i)] {
+                    let q = Point::new(p.x + dx as f32 * step, p.y + dy as f32 * step);
+                    if map.check_point(q).is_ok() && best.is_none_or(|b| q.dist(p) < b.dist(p)) {
+                        best = Some(q);
+                    }
+                }
+            }
+        }
+        best
+    }
+
     /// This scenario for a robot of `radius` metres: the map inflated for its disc (kept in
     /// [`Scenario::space`]), then checked ([`Scenario::validate`]: the start and goals need
     /// room for the disc, and each leg a way it fits through).
-    pub fn with_robot_radius(mut self, radius: f32) -> Result<Self> {
+    pub fn with_robot_radius(self, radius: f32) -> Result<Self> {
+        self.with_body(radius, false)
+    }
+
+    /// [`Scenario::with_robot_radius`], and with `snap` a start or goal where the disc has no
+    /// room is moved to the nearest position where it has (within 64 cells), with a line on
+    /// standard error that says how far.
+    pub fn with_body(mut self, radius: f32, snap: bool) -> Result<Self> {
         if !(radius.is_finite() && radius >= 0.0) {
             bail!(
                 "scenario {}: robot radius {radius} (must be a finite number of metres, not negative)",
@@ -540,6 +583,35 @@ impl Scenario {
         };
         self.space = inflated(false)?;
         self.reach = inflated(true)?;
+        if snap && radius > 0.0 {
+            let map = self.planner_map::<0>()?;
+            let mut moved = Vec::new();
+            let mut fix = |what: String, p: &mut Point| {
+                if map.check_point(*p) == Err(bi_am_rrt::error::InputError::NoRoom)
+                    && let Some(q) = self.nearest_room(&map, *p)
+                {
+                    moved.push((what, *p, q));
+                    *p = q;
+                }
+            };
+            let (mut start, mut goals) = (self.start, self.goals.clone());
+            fix("start".into(), &mut start);
+            for (i, g) in goals.iter_mut().enumerate() {
+                fix(format!("goal {}", i + 1), g);
+            }
+            for (what, p, q) in moved {
+                eprintln!(
+                    "scenario {}: {what} moved {:.3} m from {} to {} (room for a robot of radius {radius} m)",
+                    self.name,
+                    p.dist(q),
+                    self.show(p),
+                    self.show(q)
+                );
+            }
+            drop(map);
+            self.start = start;
+            self.goals = goals;
+        }
         self.validate()?;
         Ok(self)
     }
