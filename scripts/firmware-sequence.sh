@@ -3,7 +3,7 @@
 # with the paper's set and with the tuned one, on the SysTick clock at 168 MHz (QEMU's
 # -icount model: 8 ns an instruction). About 1-4 minutes of QEMU per set.
 #
-#   scripts/firmware-sequence.sh [--check] [--hw-sqrt | --m0 | --riscv]
+#   scripts/firmware-sequence.sh [--check] [--hw-sqrt | --m0 | --riscv] [--robot-radius R]
 #
 # Writes docs/firmware-sequence.txt (the README quotes it); with --hw-sqrt (nightly Rust, the
 # FPU's square root: feature `hw-sqrt`) docs/firmware-sequence-hw-sqrt.txt; with --m0 the
@@ -11,24 +11,29 @@
 # mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt; with --riscv the
 # RISC-V build (tests/riscv-twin's `office`: riscv32imac, soft float, the `time` counter at
 # 10 MHz on QEMU's virt board) docs/firmware-sequence-riscv.txt. --check compares instead of
-# writing. `.ci/run` runs all four with FIRMWARE_SEQUENCE=1.
+# writing. `.ci/run` runs all four with FIRMWARE_SEQUENCE=1. With --robot-radius R (metres) the
+# office is exported for a robot of that radius (issue 41: its inflated grid in flash beside
+# the map) and the figures go to docs/firmware-sequence-body-R.txt (the M4F build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 check=0
 hw=0
 m0=0
 rv=0
-for a in "$@"; do
-  case "$a" in
+radius=
+while [ $# -gt 0 ]; do
+  case "$1" in
     --check) check=1 ;;
     --hw-sqrt) hw=1 ;;
     --m0) m0=1 ;;
     --riscv) rv=1 ;;
-    *) echo "unknown argument $a" >&2; exit 2 ;;
+    --robot-radius) radius=$2; shift ;;
+    *) echo "unknown argument $1" >&2; exit 2 ;;
   esac
+  shift
 done
 cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
-  --scenario office --out target/flash >/dev/null
+  --scenario office --out target/flash ${radius:+--robot-radius "$radius"} >/dev/null
 export BIAMRRT_FLASH_DIR="$PWD/target/flash" BIAMRRT_GOALS=all
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf)
 cargo=(cargo)
@@ -48,6 +53,9 @@ elif [ "$rv" = 1 ]; then
   doc=docs/firmware-sequence-riscv.txt
 else
   args+=(--features firmware-example)
+fi
+if [ -n "$radius" ]; then
+  doc=${doc%.txt}-body-$radius.txt
 fi
 out=target/$(basename "$doc")
 : >"$out"

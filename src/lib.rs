@@ -15,8 +15,8 @@
 //!
 //! - [`geometry`]: points, segments, uniform sampling in a disc and in the informed ellipse.
 //! - [`map`]: the occupancy grid borrowed from bit-packed bytes (flash-friendly), dynamic
-//!   circular obstacles (still, or moving with a reported velocity), and the exact
-//!   `free_path` collision test.
+//!   circular obstacles (still, or moving with a reported velocity), the exact `free_path`
+//!   collision test, and the robot's body (a disc: the grid inflated once, exact near walls).
 //! - [`tree`]: the fixed-capacity tree arena with cached, blocked-aware path costs, edge
 //!   updates and re-rooting.
 //! - [`index`]: the bucket-grid spatial index for `Nearest` and `Nearby`.

@@ -46,6 +46,34 @@
 //! cells ([`Map::live`]); a map whose overlay flips no cell takes the grid's own test. The
 //! planner re-tests the edges near the changed cells at its next call (module `planner`).
 
+//! # The robot's body
+//!
+//! Beyond the paper, which plans for a point, the robot may be a disc of radius `r`
+//! ([`Map::with_body`], [`Map::with_baked_body`], [`crate::Config::robot_radius`]). Every test
+//! above is then the disc's: a segment is free when the disc swept along it touches no
+//! occupied live cell, stays inside the map, and meets no dynamic disc grown by `r`
+//! ([`Obstacles::set_pad`]). The test has two stages, so that a call pays for the body only
+//! near walls:
+//!
+//! 1. **Fast: the cells rule.** [`inflate`] marks every cell whose square lies closer than `r`
+//!    to an occupied cell's square or to the map's edge (`gap_cols^2 + gap_rows^2 <
+//!    (r / cell)^2`, `gap = max(|d| - 1, 0)`): every point of an unmarked cell has room for the
+//!    disc, so a segment the ordinary test passes on the inflated cells is free. The inflated
+//!    grid is made once: on the host (`host-sim export --robot-radius`, kept in flash:
+//!    [`Map::with_baked_body`]) or at start-up into a caller-owned buffer ([`Map::with_body`]),
+//!    which live edits re-inflate around the edited cells when they are submitted.
+//! 2. **Exact, for what the first refuses.** The segment is thickened by `r` plus the contact
+//!    margin, and every occupied live cell in that band is measured: free when the Euclidean
+//!    distance from the segment to each such cell's square, and to the map's edge, is at least
+//!    `r` plus the contact margin. So a disc passes any door wider than its diameter whatever
+//!    the cell size (the cells rule alone closes a cell on each side of every wall).
+//!
+//! A start or goal must have room for the disc among the grid's walls
+//! ([`InputError::NoRoom`]). [`inflate_centres`] (a cell whose centre has room) is the grid to
+//! bake a metric table on or to tell which places the disc can reach; it is not a collision
+//! test. [`Map::body_clear`] is an independent check by exact distances, which the agent
+//! protocol counts collisions with.
+
 use core::ops::ControlFlow;
 
 use crate::error::{InputError, MapError, ObstacleError};

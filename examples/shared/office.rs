@@ -414,6 +414,13 @@ pub fn exported_mission<C: Clock>(
         scenario::TABLE.len(),
         fnv1a32(&scenario::TABLE)
     );
+    if radius > 0.0 {
+        hprintln!(
+            "a robot of radius {} m: its inflated grid {} bytes in flash",
+            Metres(radius),
+            scenario::SPACE.len()
+        );
+    }
     ok
 }
 

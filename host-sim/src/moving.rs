@@ -578,6 +578,16 @@ fn reported(w: &Walker, t: f32, treatment: Treatment) -> Moving {
     }
 }
 
+/// Whether a robot of radius `r` moving along `a-b` touches an occupied cell of `grid` (for a
+/// point, the grid's own test; for a disc, exact distances: `host_sim::clearance`).
+fn touches(grid: &bi_am_rrt::OccupancyGrid<'_>, a: Point, b: Point, r: f32) -> bool {
+    if r > 0.0 {
+        crate::clearance::segment_clearance(grid, a, b) < f64::from(r) - 1e-4
+    } else {
+        !grid.segment_free(a, b)
+    }
+}
+
 /// Whether the point moving `a0 -> a1` comes within `r` of the one moving `o0 -> o1`.
 fn contact(a0: Point, a1: Point, o0: Point, o1: Point, r: f32) -> bool {
     let m = r - 1e-4;
@@ -671,8 +681,10 @@ fn one(
                     let (f0, f1) = (s as f32 / SUBSTEPS as f32, (s + 1) as f32 / SUBSTEPS as f32);
                     let o0 = w.at(t + f0 * PERIOD).0;
                     let o1 = w.at(t + f1 * PERIOD).0;
-                    hit |= contact(at(f0), at(f1), o0, o1, w.radius);
-                    hit_holding |= contact(agent, agent, o0, o1, w.radius);
+                    // A robot with a body touches a walker a radius sooner.
+                    let reach = w.radius + prep.scenario.robot_radius;
+                    hit |= contact(at(f0), at(f1), o0, o1, reach);
+                    hit_holding |= contact(agent, agent, o0, o1, reach);
                 }
                 if hit && !*touching {
                     if moved && !hit_holding {
@@ -788,7 +800,7 @@ fn door_one(
                     } else {
                         set(p, true)?;
                     }
-                    if !shut.grid().point_free(agent) {
+                    if touches(&shut.grid(), agent, agent, prep.scenario.robot_radius) {
                         row.ran_into += 1;
                     }
                 } else if closed_since.is_some_and(|c| t - c >= DOOR_CLOSED_S) {
@@ -815,7 +827,8 @@ fn door_one(
             }
             // Closed (or closed in the map): a move that touches the door's cells.
             let shut_now = closed_since.is_some() || treatment == Treatment::Rebaked;
-            let hit = shut_now && moved && !shut.grid().segment_free(agent, next);
+            let hit =
+                shut_now && moved && touches(&shut.grid(), agent, next, prep.scenario.robot_radius);
             if hit && !touching {
                 row.moved_into += 1;
             }
@@ -881,6 +894,8 @@ pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
         Some(d) if args.kinds.contains(&Kind::ClosedDoor) => {
             let mut sc = prep.scenario.clone();
             sc.map = closed_grid(&prep.scenario.map, d);
+            // Inflated again for the robot's body, on the map with the door in it.
+            let sc = sc.with_robot_radius(prep.scenario.robot_radius)?;
             let closed = Prepared::with_table(sc, prep.table);
             if base.metric == bi_am_rrt::MetricKind::Diffusion {
                 closed.diffusion()?;
