@@ -1057,9 +1057,15 @@ struct Exact<'a> {
 
 impl Exact<'_> {
     fn segment_free(&self, a: Point, b: Point) -> bool {
+        self.segment_free_work(a, b).0
+    }
+
+    /// The test and its work: a unit per row of the band, per 8 cells of a run with an
+    /// occupied cell, and per occupied cell measured.
+    fn segment_free_work(&self, a: Point, b: Point) -> (bool, u32) {
         let g = &self.raw;
         if !g.contains(a) || !g.contains(b) {
-            return false;
+            return (false, 1);
         }
         let (p, q) = (
             Point::new(a.x * g.inv_cell, a.y * g.inv_cell),
@@ -1068,33 +1074,42 @@ impl Exact<'_> {
         let (w, h, k) = (f32::from(g.cols()), f32::from(g.rows()), self.reach);
         // The edge is a wall to the disc (a segment's nearest points to it are its ends).
         if p.x.min(q.x) < k || p.y.min(q.y) < k || w - p.x.max(q.x) < k || h - p.y.max(q.y) < k {
-            return false;
+            return (false, 1);
         }
         let k2 = k * k;
-        g.for_each_span_within(a, b, k, |row, c0, c1| {
-            let free = match self.flip {
-                None => g.span_free(row, c0, c1),
-                Some(f) => g.span_free_xor(row, c0, c1, f),
-            };
-            // Only the occupied cells of a run the thick segment's box touches are measured.
-            let clear = free
-                || (c0..=c1).all(|col| {
+        let mut work = 0u32;
+        let free = g
+            .for_each_span_within(a, b, k, |row, c0, c1| {
+                work = work.saturating_add(1);
+                let free = match self.flip {
+                    None => g.span_free(row, c0, c1),
+                    Some(f) => g.span_free_xor(row, c0, c1, f),
+                };
+                if free {
+                    return ControlFlow::Continue(());
+                }
+                // Only the occupied cells of a run the thick segment's box touches are measured.
+                work = work.saturating_add(u32::from(c1.saturating_sub(c0)) / 8);
+                let clear = (c0..=c1).all(|col| {
                     let occupied = match self.flip {
                         None => !g.span_free(row, col, col),
                         Some(f) => !g.span_free_xor(row, col, col, f),
                     };
+                    if !occupied {
+                        return true;
+                    }
+                    work = work.saturating_add(1);
                     let (x, y) = (f32::from(col), f32::from(row));
-                    !occupied
-                        || segment_box_dist_sq(p, q, Point::new(x, y), Point::new(x + 1.0, y + 1.0))
-                            >= k2
+                    segment_box_dist_sq(p, q, Point::new(x, y), Point::new(x + 1.0, y + 1.0)) >= k2
                 });
-            if clear {
-                ControlFlow::Continue(())
-            } else {
-                ControlFlow::Break(())
-            }
-        })
-        .is_continue()
+                if clear {
+                    ControlFlow::Continue(())
+                } else {
+                    ControlFlow::Break(())
+                }
+            })
+            .is_continue();
+        (free, work)
     }
 }
 
@@ -1116,6 +1131,20 @@ impl<'a> Live<'a> {
             Some(f) => self.grid.segment_free_xor(a, b, f),
         };
         fast || self.exact.is_some_and(|e| e.segment_free(a, b))
+    }
+
+    /// [`Live::segment_free`] and the work units of its exact stage (0 when the first
+    /// decides): what the planner charges a body's segment test beyond the point's.
+    #[inline(never)]
+    pub fn segment_free_work(&self, a: Point, b: Point) -> (bool, u32) {
+        let fast = match self.flip {
+            None => self.grid.segment_free(a, b),
+            Some(f) => self.grid.segment_free_xor(a, b, f),
+        };
+        match self.exact {
+            Some(e) if !fast => e.segment_free_work(a, b),
+            _ => (fast, 0),
+        }
     }
 
     /// [`OccupancyGrid::point_free`] on the live cells (with a body, as `segment_free`).
@@ -1431,6 +1460,13 @@ impl<'a, const K: usize> Map<'a, K> {
     /// [`Obstacles::blocks_segment`]).
     pub fn free_path(&self, a: Point, b: Point) -> bool {
         self.live().segment_free(a, b) && !self.obstacles.blocks_segment(a, b)
+    }
+
+    /// [`Map::free_path`] and the work units of a body's exact stage
+    /// ([`Live::segment_free_work`]).
+    pub fn free_path_work(&self, a: Point, b: Point) -> (bool, u32) {
+        let (free, work) = self.live().segment_free_work(a, b);
+        (free && !self.obstacles.blocks_segment(a, b), work)
     }
 
     /// Whether the segment is inside the map, touches no occupied cell and meets no dynamic

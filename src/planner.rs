@@ -664,7 +664,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
     /// parent candidates, and in the tuned profile the greedy connection's up to 32 steps),
     /// each `2 + 2 e / cell` units at most (`e` the longer of `e_max` and `e_search`; a meet,
-    /// connect or shortcut segment at most `2 + (width + height) / cell`), in the tuned
+    /// connect or shortcut segment at most `2 + (width + height) / cell`; with a robot body of
+    /// radius `r`, a test near a wall also charges its exact stage, a unit per row of a band
+    /// `2 r / cell + 1` cells wide and per occupied cell it measures), in the tuned
     /// profile up to 64 rewires around the new node, and with `path_shortcuts` that many
     /// rewires on the path; a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). With

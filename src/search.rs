@@ -253,12 +253,15 @@ pub(crate) struct Env<'a, 'm, M, const K: usize> {
 }
 
 impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
-    /// `free_path`, charged by the cells it may cross.
+    /// `free_path`, charged by the cells it may cross (and a body's exact stage by its work).
     pub fn free<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> bool {
         let inv = 1.0 / self.map.grid().cell_size();
         let cells = (libm::fabsf(a.x - b.x) + libm::fabsf(a.y - b.y)) * inv;
         meter.charge(sat_u32(cells).saturating_add(2));
-        self.map.free_path(a, b)
+        // A robot body's exact stage near walls costs more: charged as it is done.
+        let (free, work) = self.map.free_path_work(a, b);
+        meter.charge(work);
+        free
     }
 
     /// Whether a subtree move below `top` (which refreshes the cost of every node it carries)
