@@ -7,7 +7,7 @@
 # For each map and radius:
 # - `host-sim run --all-goals --clock virtual --t-exp-ms 5 --seed 1 --snap-to-room`: per goal,
 #   reached, collisions (the agent protocol's exact check), travelled / optimum (the optimum in
-#   the space the disc can reach: the centres rule), and the clearance of the driven trail
+#   the cells where the disc has room), and the clearance of the driven trail
 #   (least, and median over points half a cell apart), by exact distances to the map's cells;
 # - `host-sim bench --budgets 0.1 --ompl target/ompl/rrt_connect --snap-to-room`: first
 #   solution against OMPL's RRT-Connect and cost at 0.1 s against Informed RRT*, per leg, in the
@@ -42,8 +42,9 @@ maps=(
   echo
   echo "## Driving every goal (\`run --all-goals --clock virtual --t-exp-ms 5 --seed 1\`)"
   echo
-  echo "Travelled / optimum: the optimum is the shortest path in the space the disc can reach (the"
-  echo "centres rule; for r = 0 the map's own). Clearance: the driven trail's least distance to an"
+  echo "Travelled / optimum: for r > 0 the optimum is the shortest path over the cells where the disc"
+  echo "has room (at a cell's centre or the middle of a side), within about a cell of the disc's own, so"
+  echo "a ratio may fall a little under 1; for r = 0 the map's exact optimum. Clearance: the driven trail's least distance to an"
   echo "occupied cell or the map's edge, and the median over points half a cell apart."
   echo
   echo "| map | r (m) | goal | reached | collisions | travelled / optimum | least clearance (m) | median clearance (m) |"
@@ -55,7 +56,7 @@ maps=(
   echo "## Against OMPL (\`bench --seeds $seeds --budgets 0.1\`, warm)"
   echo
   echo "Per leg, ours / OMPL's in the same run on the same inflated map (OMPL checks points on the"
-  echo "centres-rule grid; ours keeps the exact clearance): median over legs (worst leg)."
+  echo "grid of cells with room; ours keeps the exact clearance): median over legs (worst leg)."
   echo
   echo "| map | r (m) | legs solved | first solution / RRT-Connect | cost at 0.1 s / Informed RRT* |"
   echo "|---|---:|---:|---:|---:|"

@@ -69,10 +69,10 @@
 //!    the cell size (the cells rule alone closes a cell on each side of every wall).
 //!
 //! A start or goal must have room for the disc among the grid's walls
-//! ([`InputError::NoRoom`]). [`inflate_centres`] (a cell whose centre has room) is the grid to
-//! bake a metric table on or to tell which places the disc can reach; it is not a collision
-//! test. [`Map::body_clear`] is an independent check by exact distances, which the agent
-//! protocol counts collisions with.
+//! ([`InputError::NoRoom`]). [`Live::is_occupied`] answers whether the disc has room in a cell
+//! (its centre or the middle of a side): the grid of those answers is the one to bake a metric
+//! table on or to tell which places the disc can reach (not a collision test). [`Map::body_clear`]
+//! is an independent check by exact distances, which the agent protocol counts collisions with.
 
 use core::ops::ControlFlow;
 
@@ -436,63 +436,38 @@ where
     Ok(())
 }
 
-/// A disc rule of a robot body in cell units (module docs, "The robot's body"). With the
-/// *cells* rule ([`inflate`]) cell `c` is marked when the closed squares of `c` and of an
-/// occupied cell lie less than the radius apart, `gap_cols^2 + gap_rows^2 < (radius / cell)^2`
-/// with `gap = max(|d| - 1, 0)`: every point of an unmarked cell has room for the disc. With
-/// the *centres* rule ([`inflate_centres`]) when the square of an occupied cell lies less than
-/// the radius from `c`'s centre, `gap = max(|d| - 1/2, 0)`: the centre has room.
+/// The disc rule of a robot body in cell units (module docs, "The robot's body"): cell `c` is
+/// marked when the closed squares of `c` and of an occupied cell lie less than the radius
+/// apart, `gap_cols^2 + gap_rows^2 < (radius / cell)^2` with `gap = max(|d| - 1, 0)`: every
+/// point of an unmarked cell has room for the disc.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Disc {
     /// `(radius / cell)^2`, widened by a relative 1e-6 so that rounding marks more, never less.
     k2: f32,
     /// Rows the rule reaches on each side.
     reach: u16,
-    /// The centres rule (else the cells rule).
-    centres: bool,
 }
 
 impl Disc {
     fn new(radius: f32, cell: f32) -> Self {
-        Self::with_rule(radius, cell, false)
-    }
-
-    fn with_rule(radius: f32, cell: f32, centres: bool) -> Self {
         let k = radius / cell;
         let k2 = k * k * (1.0 + 1.0e-6);
-        let k = crate::geometry::sqrt(k2);
-        // Rows whose gap is under k: the gap is d - 1 (cells) or d - 1/2 (centres).
-        let reach = if centres {
-            libm::ceilf(k + 0.5) - 1.0
-        } else {
-            libm::ceilf(k)
-        };
         Self {
             k2,
-            reach: to_u16(sat_u32(reach)),
-            centres,
+            reach: to_u16(sat_u32(libm::ceilf(crate::geometry::sqrt(k2)))),
         }
     }
 
     /// How many columns the rule reaches on each side in a row `dr` rows away (`None`: none
     /// of that row; a radius of 0 marks only the occupied cell itself).
     fn half(&self, dr: u16) -> Option<u16> {
-        let off = if self.centres { 0.5 } else { 1.0 };
-        let gap = (f32::from(dr) - off).max(0.0);
+        let gap = f32::from(dr.saturating_sub(1));
         let room = self.k2 - gap * gap;
         if room <= 0.0 {
             return (dr == 0).then_some(0);
         }
-        // Columns d with (d - off)^2 < room (or d = 0): d < off + sqrt(room), so up to
-        // ceil(sqrt(room)) for the cells rule and ceil(sqrt(room) + 1/2) - 1 for the centres
-        // (rounding there is covered by the widened k2).
-        let s = crate::geometry::sqrt(room);
-        let half = if self.centres {
-            libm::ceilf(s + 0.5) - 1.0
-        } else {
-            libm::ceilf(s)
-        };
-        Some(to_u16(sat_u32(half)))
+        // The largest gap g with g^2 < room is ceil(sqrt(room)) - 1; columns up to g + 1 away.
+        Some(to_u16(sat_u32(libm::ceilf(crate::geometry::sqrt(room)))))
     }
 
     /// Whether cell `(col, row)` of a `width x height` grid is marked, with `occupied(row, c0,
@@ -579,29 +554,14 @@ pub fn inflate<'b>(
     radius: f32,
     out: &'b mut [u8],
 ) -> Result<OccupancyGrid<'b>, MapError> {
-    inflate_live(grid, None, radius, false, out)
+    inflate_live(grid, None, radius, out)
 }
 
-/// The cells whose *centre* lies closer than `radius` metres to an occupied cell or the map's
-/// edge, into `out` (the centres rule, module docs): where a disc centred on a cell centre
-/// does not fit. Less conservative than [`inflate`] (a free cell may hold points nearer a wall
-/// than `radius`), so not a collision test: the grid to bake a metric table on, or to tell
-/// which places a disc can reach (its free cells connect where the disc passes, to within a
-/// cell). Errors as [`inflate`] does.
-pub fn inflate_centres<'b>(
-    grid: &OccupancyGrid<'_>,
-    radius: f32,
-    out: &'b mut [u8],
-) -> Result<OccupancyGrid<'b>, MapError> {
-    inflate_live(grid, None, radius, true, out)
-}
-
-/// [`inflate`] (or with `centres`, [`inflate_centres`]) of the live cells `grid XOR flip`.
+/// [`inflate`] of the live cells `grid XOR flip`.
 fn inflate_live<'b>(
     grid: &OccupancyGrid<'_>,
     flip: Option<&[u8]>,
     radius: f32,
-    centres: bool,
     out: &'b mut [u8],
 ) -> Result<OccupancyGrid<'b>, MapError> {
     if !(radius.is_finite() && radius >= 0.0) {
@@ -612,7 +572,7 @@ fn inflate_live<'b>(
     let Some(out) = out.get_mut(..n) else {
         return Err(MapError::BufferTooShort);
     };
-    let disc = Disc::with_rule(radius, grid.cell_size(), centres);
+    let disc = Disc::new(radius, grid.cell_size());
     // A disc wider than the map fits nowhere (and this bounds the work).
     if disc.reach > w.max(h) {
         return Err(MapError::NoRoom);
@@ -1043,6 +1003,11 @@ pub struct Live<'a> {
     exact: Option<Exact<'a>>,
 }
 
+/// Where in a cell (fractions of its side from its lowest corner) a robot body's
+/// [`Live::is_occupied`] looks for room: the centre and the middles of the four sides.
+pub const ROOM_SAMPLES: [(f32, f32); 5] =
+    [(0.5, 0.5), (0.5, 0.0), (0.0, 0.5), (1.0, 0.5), (0.5, 1.0)];
+
 /// A robot body's exact test (module docs, "The robot's body"): a segment is free when it lies
 /// in the map, keeps `reach` cells (the radius plus the contact margin) from the map's edge,
 /// and keeps `reach` from the square of every occupied live cell (Euclidean, in cell units).
@@ -1157,7 +1122,11 @@ impl<'a> Live<'a> {
         fast || self.exact.is_some_and(|e| e.segment_free(p, p))
     }
 
-    /// Whether cell `(col, row)` is occupied now (outside the grid: occupied).
+    /// Whether cell `(col, row)` is occupied now (outside the grid: occupied). With a robot
+    /// body: whether the disc has no room in the cell, as far as [`ROOM_SAMPLES`] tell (the
+    /// inflated cells, and for the margin they add next to walls the exact test at the
+    /// cell's centre and the middles of its sides), so that a passage the disc fits through
+    /// reads as open however the cells fall across it.
     pub fn is_occupied(&self, col: u16, row: u16) -> bool {
         let base = self.grid.is_occupied(col, row);
         let i = cell_index(col, row, self.grid.cols());
@@ -1165,7 +1134,18 @@ impl<'a> Live<'a> {
             .flip
             .and_then(|f| f.get(i / 8))
             .is_some_and(|b| b & (1 << (i % 8)) != 0);
-        base != (flipped && col < self.grid.cols() && row < self.grid.rows())
+        let occupied = base != (flipped && col < self.grid.cols() && row < self.grid.rows());
+        match self.exact {
+            Some(e) if occupied && col < self.grid.cols() && row < self.grid.rows() => {
+                let cell = self.grid.cell_size();
+                let corner = Point::new(f32::from(col) * cell, f32::from(row) * cell);
+                !ROOM_SAMPLES.iter().any(|&(u, v)| {
+                    let p = Point::new(corner.x + u * cell, corner.y + v * cell);
+                    e.segment_free(p, p)
+                })
+            }
+            _ => occupied,
+        }
     }
 
     /// Whether free cell `(col, row)` lies in a passage at most about `2 * reach` cells wide:
@@ -1242,7 +1222,7 @@ impl<'a, const K: usize> Map<'a, K> {
     /// Errors as [`inflate`] does.
     pub fn with_body(mut self, radius: f32, buffer: &'a mut [u8]) -> Result<Self, MapError> {
         let flip = self.overlay.as_ref().map(|o| &*o.bits);
-        inflate_live(&self.grid, flip, radius, false, &mut *buffer)?;
+        inflate_live(&self.grid, flip, radius, &mut *buffer)?;
         if radius > 0.0 {
             let n = OccupancyGrid::bytes_needed(self.grid.cols(), self.grid.rows());
             self.body = Some(Body {

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::error::{InputError, MapError, SetupError};
-use bi_am_rrt::map::{CONTACT_MARGIN, inflate, inflate_centres, pack_grid};
+use bi_am_rrt::map::{CONTACT_MARGIN, ROOM_SAMPLES, inflate, pack_grid};
 use bi_am_rrt::{Circle, Config, Euclidean, Map, OccupancyGrid, Planner, Point, Storage};
 use proptest::prelude::*;
 use rand_core::{Rng, SeedableRng};
@@ -522,10 +522,12 @@ fn the_exact_test_is_sound_and_complete_to_the_margin() {
     );
 }
 
-/// The centres rule, stated independently: a cell is marked when its centre lies closer than
-/// the radius to an occupied cell's square or the map's edge, or it is occupied itself.
+/// A body's `Live::is_occupied`, against this file's distances: a cell it calls free has a
+/// sample point (`ROOM_SAMPLES`) with room for the disc, and one it calls occupied has none
+/// with room plus twice the contact margin; a door wider than the disc's diameter reads open
+/// even where no cell centre has room in it.
 #[test]
-fn the_centres_rule_by_independent_distances() {
+fn cells_with_room_by_independent_distances() {
     let mut rng = XorShiftRng::seed_from_u64(42);
     for case in 0..40 {
         let (w, h) = (14 + case % 5, 11 + case % 4);
@@ -534,34 +536,47 @@ fn the_centres_rule_by_independent_distances() {
         let radius = cell * (rng.next_u32() % 300) as f32 / 100.0;
         let bits = packed(&occ, w as u16, h as u16);
         let g = OccupancyGrid::new(&bits, w as u16, h as u16, cell).unwrap();
-        let mut out = vec![0u8; bits.len()];
-        let Ok(reach) = inflate_centres(&g, radius, &mut out) else {
+        let mut space = vec![0u8; bits.len()];
+        let Ok(map) = Map::<'_, 4>::new(g).with_body(radius, &mut space) else {
             continue;
         };
+        let live = map.live();
         let (cf, rf) = (f64::from(cell), f64::from(radius));
+        let margin = 2.0 * f64::from(CONTACT_MARGIN) * cf + 1e-6;
         for r in 0..h {
             for c in 0..w {
-                let centre = [(c as f64 + 0.5) * cf, (r as f64 + 0.5) * cf];
-                let (wm, hm) = (w as f64 * cf, h as f64 * cf);
-                let mut d = [centre[0], centre[1], wm - centre[0], hm - centre[1]]
-                    .into_iter()
-                    .fold(f64::INFINITY, f64::min);
-                for (i, _) in occ.iter().enumerate().filter(|(_, o)| **o) {
-                    let lo = [(i % w) as f64 * cf, (i / w) as f64 * cf];
-                    d = d.min(seg_box(centre, centre, lo, [lo[0] + cf, lo[1] + cf]));
-                }
-                let marked = reach.is_occupied(c as u16, r as u16);
-                let own = occ[r * w + c];
-                if own || d < rf * (1.0 - 1e-5) {
-                    assert!(marked, "case {case}: ({c}, {r}) centre at {d} m, r {rf}");
-                }
-                if marked && !own {
+                let room = ROOM_SAMPLES
+                    .iter()
+                    .map(|&(u, v)| {
+                        let p = Point::new((c as f32 + u) * cell, (r as f32 + v) * cell);
+                        clearance(&occ, w, h, cf, p, p)
+                    })
+                    .fold(0.0f64, f64::max);
+                if live.is_occupied(c as u16, r as u16) {
                     assert!(
-                        d < rf * (1.0 + 1e-5),
-                        "case {case}: ({c}, {r}) at {d} m, r {rf}"
+                        occ[r * w + c] || room < rf + margin,
+                        "case {case}: ({c}, {r}) has {room} m of room for r {rf}"
+                    );
+                } else {
+                    assert!(
+                        room >= rf - 1e-5 * cf,
+                        "case {case}: ({c}, {r}) {room} m, r {rf}"
                     );
                 }
             }
         }
     }
+    // A 2 m door on a 1 m grid (column 5, rows 4-5): a 1.2 m disc fits on the line between
+    // the door's two cells, where no cell centre has room; the cells read open.
+    let occ: Vec<bool> = (0..200)
+        .map(|i| i % 20 == 5 && !(4..=5).contains(&(i / 20)))
+        .collect();
+    let bits = packed(&occ, 20, 10);
+    let g = OccupancyGrid::new(&bits, 20, 10, 1.0).unwrap();
+    let mut space = vec![0u8; bits.len()];
+    let map = Map::<'_, 4>::new(g).with_body(0.6, &mut space).unwrap();
+    assert!(!map.live().is_occupied(5, 4) && !map.live().is_occupied(5, 5));
+    assert!(map.free_path(Point::new(3.0, 5.0), Point::new(8.0, 5.0)));
+    let map = Map::<'_, 4>::new(g).with_body(1.05, &mut space).unwrap();
+    assert!(map.live().is_occupied(5, 4) && map.live().is_occupied(5, 5));
 }

@@ -401,7 +401,7 @@ pub fn export_flash(
     table: &TableOptions,
     dir: &Path,
 ) -> Result<Exported> {
-    // With a robot body the table is baked on where its disc can go (the centres rule), and
+    // With a robot body the table is baked on where its disc can go (the cells with room), and
     // the grid inflated by the cells rule, the planner's fast test, goes to flash beside the
     // map's own (`SPACE`, `ROBOT_RADIUS`).
     let table = &TableOptions {

@@ -295,9 +295,10 @@ pub struct Scenario {
     /// The map inflated for the robot's disc by the cells rule ([`bi_am_rrt::map::inflate`])
     /// when the radius is not 0: the planner's fast test (its exact test reads the map).
     pub space: Option<OwnedGrid>,
-    /// The cells whose centre has room for the disc ([`bi_am_rrt::map::inflate_centres`]) when
-    /// the radius is not 0: where the disc can go, to within a cell, for the metric tables,
-    /// the exact optimum, OMPL and the check that every leg can be driven.
+    /// The cells where the disc has room (at the centre or the middle of a side:
+    /// `bi_am_rrt::map::Live::is_occupied` with the body) when the radius is not 0: where it
+    /// can go, to within a cell, for the metric tables, the exact optimum, OMPL and the check
+    /// that every leg can be driven.
     pub reach: Option<OwnedGrid>,
 }
 
@@ -562,27 +563,27 @@ impl Scenario {
             );
         }
         self.robot_radius = radius;
-        let inflated = |centres: bool| -> Result<Option<OwnedGrid>> {
-            if radius <= 0.0 {
-                return Ok(None);
-            }
+        self.space = None;
+        self.reach = None;
+        if radius > 0.0 {
             let g = self.map.grid();
             let mut bits = vec![0u8; OccupancyGrid::bytes_needed(g.cols(), g.rows())];
-            let rule = if centres {
-                bi_am_rrt::map::inflate_centres
-            } else {
-                bi_am_rrt::map::inflate
-            };
-            rule(&g, radius, &mut bits).map_err(|e| {
+            bi_am_rrt::map::inflate(&g, radius, &mut bits).map_err(|e| {
                 anyhow::anyhow!("scenario {}: robot radius {radius} m: {e}", self.name)
             })?;
-            Ok(Some(OwnedGrid {
+            self.space = Some(OwnedGrid {
                 bits,
                 ..self.map.clone()
-            }))
-        };
-        self.space = inflated(false)?;
-        self.reach = inflated(true)?;
+            });
+            // Where the disc has room, cell by cell (`Live::is_occupied` with the body).
+            let map = self.planner_map::<0>()?;
+            let live = map.live();
+            let reach = OwnedGrid::from_fn(g.cols(), g.rows(), g.cell_size(), |c, r| {
+                live.is_occupied(c, r)
+            })?;
+            drop(map);
+            self.reach = Some(reach);
+        }
         if snap && radius > 0.0 {
             let map = self.planner_map::<0>()?;
             let mut moved = Vec::new();
