@@ -296,14 +296,12 @@ impl<'a> OccupancyGrid<'a> {
         self.for_each_span_within(a, b, CONTACT_MARGIN, f)
     }
 
-    /// [`Self::for_each_span`] with the segment thickened by `m` cells instead of the contact
-    /// margin (a robot body's exact test thickens it by its radius).
-    fn for_each_span_within<F>(&self, a: Point, b: Point, m: f32, mut f: F) -> ControlFlow<()>
+    /// [`Self::for_each_span`] with the segment thickened by `margin` cells instead of the
+    /// contact margin (a robot body's exact test thickens it by its radius and the margin).
+    fn for_each_span_within<F>(&self, a: Point, b: Point, margin: f32, mut f: F) -> ControlFlow<()>
     where
         F: FnMut(u16, u16, u16) -> ControlFlow<()>,
     {
-        let margin = m;
-        let m = CONTACT_MARGIN;
         if !a.is_finite() || !b.is_finite() {
             return ControlFlow::Break(());
         }
@@ -327,7 +325,7 @@ impl<'a> OccupancyGrid<'a> {
         // (a few ulps of the larger |y|, over the rise): where that error would be large, the
         // piece is its whole x-range. Taking the whole x-range in every row it comes near made
         // the test refuse sub-segments of segments it passed (issue 41's maze step).
-        let steep = dy > m;
+        let steep = dy > CONTACT_MARGIN;
         let slope = if steep { dx / dy } else { 0.0 };
         let slack = 4.0 * f32::EPSILON * p.y.abs().max(q.y.abs()).max(1.0);
         for row in row_lo..=row_hi {
