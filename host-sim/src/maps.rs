@@ -471,7 +471,7 @@ impl Scenario {
             String::new()
         };
         let check = |what: String, p: Point| {
-            map.check_point(p).map_err(|e| {
+            self.room(&map, p).map_err(|e| {
                 // Where the disc would fit instead, when it is the body that does not.
                 let near = match e {
                     bi_am_rrt::error::InputError::NoRoom => self
@@ -524,6 +524,25 @@ impl Scenario {
         Ok(())
     }
 
+    /// `map.check_point(p)`, and with a body also room in `p`'s cell of [`Scenario::reach`]
+    /// (a position with room only in a corner of its cell, where no sample finds it, is one
+    /// the metric tables cannot place: [`InputError::NoRoom`](bi_am_rrt::error::InputError)).
+    fn room<const K: usize>(
+        &self,
+        map: &bi_am_rrt::Map<'_, K>,
+        p: Point,
+    ) -> Result<(), bi_am_rrt::error::InputError> {
+        map.check_point(p)?;
+        let Some(reach) = &self.reach else {
+            return Ok(());
+        };
+        let g = reach.grid();
+        match g.cell_of(p) {
+            Some((c, r)) if !g.is_occupied(c, r) => Ok(()),
+            _ => Err(bi_am_rrt::error::InputError::NoRoom),
+        }
+    }
+
     /// The nearest position to `p` (on a grid of a tenth of a cell, within 64 cells) where
     /// `map` accepts a start or a goal.
     fn nearest_room<const K: usize>(&self, map: &bi_am_rrt::Map<'_, K>, p: Point) -> Option<Point> {
@@ -536,7 +555,7 @@ impl Scenario {
             for i in -ring..=ring {
                 for (dx, dy) in [(i, -ring), (i, ring), (-ring, i), (ring, i)] {
                     let q = Point::new(p.x + dx as f32 * step, p.y + dy as f32 * step);
-                    if map.check_point(q).is_ok() && best.is_none_or(|b| q.dist(p) < b.dist(p)) {
+                    if self.room(map, q).is_ok() && best.is_none_or(|b| q.dist(p) < b.dist(p)) {
                         best = Some(q);
                     }
                 }
@@ -588,7 +607,7 @@ impl Scenario {
             let map = self.planner_map::<0>()?;
             let mut moved = Vec::new();
             let mut fix = |what: String, p: &mut Point| {
-                if map.check_point(*p) == Err(bi_am_rrt::error::InputError::NoRoom)
+                if self.room(&map, *p) == Err(bi_am_rrt::error::InputError::NoRoom)
                     && let Some(q) = self.nearest_room(&map, *p)
                 {
                     moved.push((what, *p, q));
