@@ -6,6 +6,8 @@
 
 use std::path::Path;
 
+mod common;
+
 use bi_am_rrt::Point;
 use host_sim::maps::{OwnedGrid, Scenario};
 
@@ -111,29 +113,7 @@ fn run_keeps_the_disc_clear_and_writes_the_trail() {
 fn door_scenes_run_with_a_body() {
     use host_sim::moving::{Kind, MovingArgs, Treatment, moving};
     let dir = tempfile::tempdir().unwrap();
-    let map = OwnedGrid::from_fn(40, 30, 1.0, |c, r| {
-        c == 0
-            || r == 0
-            || c == 39
-            || r == 29
-            || (c == 20 && !(5..10).contains(&r) && !(20..25).contains(&r))
-    })
-    .unwrap();
-    let scenario = Scenario {
-        name: "two-doors".into(),
-        map,
-        source: "test".into(),
-        start: Point::new(5.5, 7.5),
-        goals: vec![Point::new(34.5, 7.5)],
-        sigma: 18.0,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-    }
-    .with_robot_radius(0.3)
-    .unwrap();
+    let scenario = common::two_doors().with_robot_radius(0.3).unwrap();
     let prep = host_sim::sim::Prepared::new(scenario);
     let rows = moving(
         &prep,
@@ -160,7 +140,7 @@ fn door_scenes_run_with_a_body() {
 /// seed 1 (`run --all-goals --clock virtual --seed 1 --t-exp-ms 5`). Seeds 1-10, every goal:
 /// reached, no collision (the protocol's exact check).
 #[test]
-#[ignore = "long: 30 legs of the 512 x 512 maze, about 6 minutes on 2 cores (CI runs it)"]
+#[ignore = "long: 30 legs of the 512 x 512 maze, about 4 minutes on 2 cores (CI runs it)"]
 fn regression_maze512_no_collisions_seeds_1_to_10() {
     use rayon::prelude::*;
     let file =

@@ -4,6 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
+mod common;
+
 use bi_am_rrt::builtin;
 use host_sim::clock::ClockKind;
 use host_sim::diffusion::{Options, TableOptions};
@@ -1307,28 +1309,7 @@ fn leg_ratios_take_the_median_and_the_worst_leg() {
 fn door_scenes_run_and_report() {
     use host_sim::moving::{Kind, MovingArgs, Treatment, moving, report};
     let dir = tempfile::tempdir().unwrap();
-    // 40 m x 30 m, a wall at x = 20 m with doorways at y 5-10 m (on the way) and 20-25 m.
-    let map = maps::OwnedGrid::from_fn(40, 30, 1.0, |c, r| {
-        c == 0
-            || r == 0
-            || c == 39
-            || r == 29
-            || (c == 20 && !(5..10).contains(&r) && !(20..25).contains(&r))
-    })
-    .unwrap();
-    let scenario = maps::Scenario {
-        name: "two-doors".into(),
-        map,
-        source: "test".into(),
-        start: bi_am_rrt::Point::new(5.5, 7.5),
-        goals: vec![bi_am_rrt::Point::new(34.5, 7.5)],
-        sigma: 18.0,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-    };
+    let scenario = common::two_doors();
     let prep = host_sim::sim::Prepared::new(scenario);
     let rows = moving(
         &prep,
