@@ -364,6 +364,12 @@ pub struct Config {
     /// [`crate::Map::with_baked_body`]); the planner then keeps the whole disc clear of the
     /// walls, the live cells and the dynamic discs (each grown by the map's radius).
     pub robot_radius: f32,
+    /// The clearance preference (beyond the paper: 0, every edge costs its length): how much
+    /// more a metre costs at the body's edge than in open space, the cost falling to the
+    /// length itself at the margin the map's clearance field was built for
+    /// ([`crate::clearance`], [`crate::Map::with_clearance`]). 1 makes a metre along a wall
+    /// cost up to 2; paths then keep off walls where the space allows, at some length.
+    pub clearance_weight: f32,
 }
 
 impl Default for Config {
@@ -420,6 +426,7 @@ impl Config {
             as_printed: AsPrinted::NONE,
             motion: Motion::NONE,
             robot_radius: 0.0,
+            clearance_weight: 0.0,
         }
     }
 
@@ -635,6 +642,10 @@ impl Config {
             (
                 self.robot_radius.is_finite() && self.robot_radius >= 0.0,
                 ConfigError::RobotRadius,
+            ),
+            (
+                self.clearance_weight.is_finite() && self.clearance_weight >= 0.0,
+                ConfigError::ClearanceWeight,
             ),
         ];
         match checks.iter().find(|(ok, _)| !ok) {

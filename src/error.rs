@@ -51,6 +51,12 @@ error_enum! {
         /// Live cells on a map whose inflated grid is read-only (baked into flash): a body
         /// with live cells needs the inflated grid in a buffer (`Map::with_body`).
         BodyInFlash => "live cells with a robot body need the inflated grid in a RAM buffer (Map::with_body)",
+        /// A clearance margin (`clearance::clearance_field`) is NaN, infinite, negative or
+        /// wider than 255 cells.
+        BadMargin => "clearance margin must be finite, not negative and at most 255 cells",
+        /// A clearance field (`Map::with_clearance`) holds fewer bytes than the grid has
+        /// cells.
+        FieldTooShort => "clearance field shorter than width * height bytes",
     }
 }
 
@@ -107,6 +113,8 @@ error_enum! {
         Motion => "the motion's speeds, period and horizon must be finite and not negative",
         /// `robot_radius` is NaN, infinite or negative.
         RobotRadius => "robot_radius must be finite and not negative",
+        /// `clearance_weight` is NaN, infinite or negative.
+        ClearanceWeight => "clearance_weight must be finite and not negative",
     }
 }
 
@@ -128,6 +136,9 @@ pub enum SetupError {
     /// The configuration's `robot_radius` is larger than the radius the map's grid was
     /// inflated for (`Map::with_body`, `Map::with_baked_body`; 0 without a body).
     Body,
+    /// The configuration's `clearance_weight` is above 0 but the map has no clearance field
+    /// (`Map::with_clearance`): the preference would silently do nothing.
+    Clearance,
 }
 
 impl core::fmt::Display for SetupError {
@@ -138,6 +149,9 @@ impl core::fmt::Display for SetupError {
             Self::Metric(e) => write!(f, "metric does not fit the map: {e}"),
             Self::Body => f.write_str(
                 "robot_radius exceeds the radius the map was inflated for (Map::with_body)",
+            ),
+            Self::Clearance => f.write_str(
+                "clearance_weight is set but the map has no clearance field (Map::with_clearance)",
             ),
             Self::Map => {
                 f.write_str("map scale out of range: squared distances overflow or vanish in f32")

@@ -112,6 +112,7 @@
 
 pub mod agent;
 pub mod builtin;
+pub mod clearance;
 pub mod clock;
 pub mod config;
 #[cfg(feature = "cortex-m")]

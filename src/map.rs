@@ -1197,6 +1197,8 @@ pub struct Map<'a, const K: usize> {
     grid: OccupancyGrid<'a>,
     overlay: Option<Overlay<'a>>,
     body: Option<Body<'a>>,
+    /// The clearance field, a byte per cell ([`crate::clearance`]).
+    clearance: Option<&'a [u8]>,
     obstacles: Obstacles<K>,
 }
 
@@ -1207,7 +1209,32 @@ impl<'a, const K: usize> Map<'a, K> {
             grid,
             overlay: None,
             body: None,
+            clearance: None,
             obstacles: Obstacles::new(),
+        }
+    }
+
+    /// This world with a clearance field (a byte per cell, row-major: written by
+    /// [`crate::clearance::clearance_field`] into RAM, or baked into flash), which a
+    /// configuration's [`crate::Config::clearance_weight`] turns into a preference for paths
+    /// away from walls. Errors when `field` holds fewer bytes than the grid has cells.
+    pub fn with_clearance(mut self, field: &'a [u8]) -> Result<Self, MapError> {
+        let n = usize::from(self.grid.cols()).saturating_mul(usize::from(self.grid.rows()));
+        self.clearance = Some(field.get(..n).ok_or(MapError::FieldTooShort)?);
+        Ok(self)
+    }
+
+    /// Whether the map carries a clearance field ([`Map::with_clearance`]).
+    pub fn has_clearance(&self) -> bool {
+        self.clearance.is_some()
+    }
+
+    /// The clearance class (0-7) of segment `a-b` and the work it took
+    /// ([`crate::clearance::class_of`]); `(0, 0)` without a clearance field.
+    pub fn clearance_class(&self, a: Point, b: Point) -> (u8, u32) {
+        match self.clearance {
+            Some(f) => crate::clearance::class_of(&self.grid, f, a, b),
+            None => (0, 0),
         }
     }
 

@@ -96,7 +96,7 @@ use crate::motion::{Choice, choose};
 use crate::rewire::Slice;
 use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sat_u32, sort_small_by, units};
-use crate::tree::{Cost, NodeId, Tree};
+use crate::tree::{Cost, Edge, NodeId, Tree};
 
 /// With a root step (`root_step`, [`Config::rewiring`]), the root waits for the goal to join
 /// before it moves, unless the forward arena is full and the search has made this many expansions per
@@ -308,6 +308,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if cfg.robot_radius > map.radius() {
             return Err(SetupError::Body);
         }
+        if cfg.clearance_weight > 0.0 && !map.has_clearance() {
+            return Err(SetupError::Clearance);
+        }
         map.check_point(start)?;
         metric
             .check_map(&map.metric_grid())
@@ -323,6 +326,9 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             if !store.index.reshape(w, h, side) {
                 return Err(SetupError::Map);
             }
+        }
+        for store in [&mut *forward, &mut *reverse] {
+            store.tree.set_clearance_weight(cfg.clearance_weight);
         }
         forward.reset(start);
         reverse.clear();
@@ -921,7 +927,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 }
                 self.rename_goal(keep[1]);
             }
-            let Ok(id) = self.fwd.insert(agent, keep[0], blocked) else {
+            let class = self.clearance_class(self.fwd.pos(keep[0]), agent, meter);
+            let Ok(id) = self.fwd.insert(agent, keep[0], Edge { blocked, class }) else {
                 return false;
             };
             meter.charge(units(N / 8));
@@ -1101,10 +1108,15 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let Some(root) = self.fwd.tree.root() else {
             return next;
         };
-        let Ok(mid) = self.fwd.insert(a.step_towards(b, step), root, false) else {
+        // Both halves lie on the edge's line: they keep its clearance class.
+        let edge = Edge {
+            blocked: false,
+            class: self.fwd.tree.edge_class(next).unwrap_or(0),
+        };
+        let Ok(mid) = self.fwd.insert(a.step_towards(b, step), root, edge) else {
             return next;
         };
-        match self.fwd.tree.set_parent(next, mid, false) {
+        match self.fwd.tree.set_parent(next, mid, edge) {
             Ok(moved) => {
                 meter.charge(units(moved).saturating_add(4));
                 mid
@@ -1112,6 +1124,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             // Cannot happen (`mid` is a new leaf); it would stay a harmless leaf.
             Err(_) => next,
         }
+    }
+
+    /// The clearance class of a new edge `a-b` (0 without a clearance preference), charged.
+    fn clearance_class<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> u8 {
+        if self.cfg.clearance_weight <= 0.0 {
+            return 0;
+        }
+        let (class, work) = self.map.clearance_class(a, b);
+        meter.charge(work);
+        class
     }
 
     /// Sub-budget for a rewiring phase.
@@ -1401,11 +1423,13 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // The meeting segment was tested free; each later edge keeps both of its flags (an
         // edge through a marked cell stays walled, or re-flagging for an obstacle would clear
         // it).
+        // The meeting segment's clearance class is measured; the trunk's edges keep theirs.
         let (mut blocked, mut walled) = (false, false);
+        let mut class = self.clearance_class(self.fwd.pos(parent), self.rev.pos(b), meter);
         let mut v = Some(b);
         while let Some(x) = v {
             let pos = self.rev.pos(x);
-            match self.fwd.insert(pos, parent, blocked) {
+            match self.fwd.insert(pos, parent, Edge { blocked, class }) {
                 Ok(id) => parent = id,
                 Err(_) => return false,
             }
@@ -1413,6 +1437,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 self.fwd.tree.set_edge_walled(parent, true);
             }
             (blocked, walled) = self.rev.tree.edge_sources(x);
+            class = self.rev.tree.edge_class(x).unwrap_or(0);
             v = self.rev.tree.parent(x);
         }
         if let Some(goal) = self.goal.as_mut() {

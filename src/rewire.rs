@@ -69,7 +69,7 @@ use crate::geometry::{Ellipse, Point};
 use crate::metric::Metric;
 use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
-use crate::tree::{Mark, NodeId};
+use crate::tree::{Edge, Mark, NodeId};
 
 /// Segment tests of one corner cut's bisection ([`TreeStore::cut_corner`]), after a first
 /// test 1/32 of the way along the parent's edge: the cut point lies within 1/256 of the
@@ -183,6 +183,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             Some(v) => pp.dist(v) + v.dist(pc),
             None => pp.dist(pc),
         };
+        // The Euclidean cost first: a lower bound of the charged one (clearance preference).
         let new = self.cost(parent).extend(length, false);
         if new >= self.cost(child) || !env.affords_move(&self.tree, child, meter) {
             return Err(Refused::NoGain);
@@ -190,7 +191,17 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         if !(known_free || env.free(pp, pc, meter)) {
             return Err(Refused::Hidden);
         }
-        self.move_below(child, parent, meter).ok_or(Refused::NoGain)
+        let edge = env.edge(pp, pc, meter);
+        if edge.class > 0
+            && self
+                .cost(parent)
+                .extend(env.charged(length, edge.class), false)
+                >= self.cost(child)
+        {
+            return Err(Refused::NoGain);
+        }
+        self.move_below(child, parent, edge, meter)
+            .ok_or(Refused::NoGain)
     }
 
     /// `UpdateEdge`: `child` below `parent`, charging the moved subtree (its costs are
@@ -199,9 +210,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         &mut self,
         child: NodeId,
         parent: NodeId,
+        edge: Edge,
         meter: &Meter<'_, C>,
     ) -> Option<()> {
-        let moved = self.tree.set_parent(child, parent, false).ok()?;
+        let moved = self.tree.set_parent(child, parent, edge).ok()?;
         meter.charge(units(moved).saturating_add(4));
         Some(())
     }
@@ -285,19 +297,29 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
         };
         let last = b.unwrap_or(a);
-        let cost = self.cost(g).extend(pg.dist(a), false);
-        let cost = b.map_or(cost, |b| cost.extend(a.dist(b), false));
-        if cost.extend(last.dist(px), false) >= self.cost(x)
+        // The new edges g - a (- b) - x, each with its clearance class.
+        let (e_ga, e_ab, e_x) = (
+            env.edge(pg, a, meter),
+            b.map(|b| env.edge(a, b, meter)).unwrap_or_default(),
+            env.edge(last, px, meter),
+        );
+        let cost = self
+            .cost(g)
+            .extend(env.charged(pg.dist(a), e_ga.class), false);
+        let cost = b.map_or(cost, |b| {
+            cost.extend(env.charged(a.dist(b), e_ab.class), false)
+        });
+        if cost.extend(env.charged(last.dist(px), e_x.class), false) >= self.cost(x)
             || self.tree.len().saturating_add(2) > N
         {
             return None;
         }
-        let cut = self.insert(a, g, false).ok()?;
+        let cut = self.insert(a, g, e_ga).ok()?;
         let cut = match b {
-            Some(b) => self.insert(b, cut, false).ok()?,
+            Some(b) => self.insert(b, cut, e_ab).ok()?,
             None => cut,
         };
-        self.move_below(x, cut, meter)?;
+        self.move_below(x, cut, e_x, meter)?;
         Some(cut)
     }
 

@@ -70,7 +70,7 @@ use crate::metric::{Metric, Prepared};
 use crate::sample::{GoalView, sample_state};
 use crate::slots::{sat_u32, sort_small_by, to_u16, units};
 use crate::sweep::{NodeQueue, NodeStack, SWEEP_CAP};
-use crate::tree::{Cost, Mark, NodeId, Tree};
+use crate::tree::{Cost, Edge, Mark, NodeId, Tree, charged};
 use rand_core::Rng;
 
 /// Most neighbours one `Nearby` query hands to the planner (more are counted, not used).
@@ -209,9 +209,9 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         &mut self,
         pos: Point,
         parent: NodeId,
-        blocked: bool,
+        edge: impl Into<Edge>,
     ) -> Result<NodeId, TreeError> {
-        let id = self.tree.add(pos, parent, blocked)?;
+        let id = self.tree.add(pos, parent, edge)?;
         // Cannot fail: the id is below N and new, the position finite.
         let _ = self.index.insert(id, pos);
         Ok(id)
@@ -262,6 +262,35 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
         let (free, work) = self.map.free_path_work(a, b);
         meter.charge(work);
         free
+    }
+
+    /// Whether the planner prefers clearance ([`crate::Config::clearance_weight`] above 0; the
+    /// planner refuses a weight without a clearance field).
+    #[inline]
+    pub fn weighted(&self) -> bool {
+        self.cfg.clearance_weight > 0.0
+    }
+
+    /// A new free edge `a-b` as the tree records it: its clearance class, charged by the
+    /// points it samples (class 0 and no work without a preference).
+    #[inline(never)]
+    pub fn edge<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> Edge {
+        if !self.weighted() {
+            return Edge::default();
+        }
+        let (class, work) = self.map.clearance_class(a, b);
+        meter.charge(work);
+        Edge {
+            blocked: false,
+            class,
+        }
+    }
+
+    /// The length an edge of Euclidean length `len` and class `class` is charged
+    /// ([`crate::tree::charged`]).
+    #[inline]
+    pub fn charged(&self, len: f32, class: u8) -> f32 {
+        charged(len, class, self.cfg.clearance_weight)
     }
 
     /// Whether a subtree move below `top` (which refreshes the cost of every node it carries)
@@ -583,8 +612,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let mut near = Near::new();
         self.nearby(goal, e_max, &mut near, meter);
         keep_candidate(&mut near, q);
-        let parent = self.best_parent(env, goal, &mut near, None, meter)?;
-        self.insert_making_room(rng, goal, parent, Some(target), None, meter, full)
+        let (parent, edge) = self.best_parent(env, goal, &mut near, None, meter)?;
+        self.insert_making_room(rng, goal, parent, edge, Some(target), None, meter, full)
     }
 
     /// Sample, nearest, steer and add (module docs): the new node, and whether it stands on
@@ -715,11 +744,13 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             // The steering's segment from x_nearest is known free.
             tuned.then_some(x_nearest)
         };
-        let parent = self.best_parent(env, x_new, &mut near, seen, meter)?;
+        let (parent, edge) = self.best_parent(env, x_new, &mut near, seen, meter)?;
         // The new state's cost bound below `parent`: a lower bound of a path through it.
         let bound = |s: &Self, goal: Point| {
-            s.cost(parent)
-                .extend(s.pos(parent).dist(x_new) + x_new.dist(goal), false)
+            s.cost(parent).extend(
+                env.charged(s.pos(parent).dist(x_new), edge.class) + x_new.dist(goal),
+                false,
+            )
         };
         let id = match (swap, &view, target) {
             // A dense neighbourhood's trade: the worst leaf's slot, if the state does better.
@@ -734,7 +765,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 if t.node.is_some() {
                     t.node = Some(keep[1]);
                 }
-                self.insert(x_new, keep[0], false).ok()?
+                self.insert(x_new, keep[0], edge).ok()?
             }
             // A full tree may trade a leaf for a state that can shorten the path (tuned).
             (_, _, target) => {
@@ -742,7 +773,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     bound: bound(self, view.as_ref().map_or(x_new, |v| v.goal)),
                     cover: cfg.memory.recycle_cover,
                 });
-                self.insert_making_room(rng, x_new, parent, target, trade, meter, full)?
+                self.insert_making_room(rng, x_new, parent, edge, target, trade, meter, full)?
             }
         };
         // RRT*'s rewiring around the new node: each neighbour takes it as parent when that is
@@ -796,7 +827,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 return None;
             }
             meter.charge(4);
-            from = self.insert(next, from, false).ok()?;
+            let edge = env.edge(a, next, meter);
+            from = self.insert(next, from, edge).ok()?;
         }
         None
     }
@@ -865,13 +897,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         rng: &mut R,
         pos: Point,
         parent: NodeId,
+        edge: Edge,
         target: Option<&mut Target>,
         trade: Option<Trade>,
         meter: &Meter<'_, C>,
         full: &mut bool,
     ) -> Option<NodeId> {
         if !self.tree.is_full() {
-            return self.insert(pos, parent, false).ok();
+            return self.insert(pos, parent, edge).ok();
         }
         *full = true;
         let t = target?;
@@ -887,7 +920,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         if t.node.is_some() {
             t.node = Some(keep[1]);
         }
-        self.insert(pos, keep[0], false).ok()
+        self.insert(pos, keep[0], edge).ok()
     }
 
     /// Frees one slot of the arena by removing the leaf least likely to lie on a path to
@@ -1071,9 +1104,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         self.goal_stack.iter_mut().for_each(fix);
     }
 
-    /// The candidate giving `x` the lowest cost over a free segment: candidates are ordered by
-    /// the cost they would give, and segments are tested in that order until one is free
-    /// (`seen`'s segment to `x` is known free: the steering tested it).
+    /// The candidate giving `x` the lowest cost over a free segment, and that edge: candidates
+    /// are ordered by the cost they would give, and segments are tested in that order until
+    /// one is free (`seen`'s segment to `x` is known free: the steering tested it). With a
+    /// clearance preference the order is by the Euclidean cost, a lower bound: the scan goes
+    /// on past the first free candidate while a later one's bound is below the best charged
+    /// cost found (branch and bound; the same choice as testing all).
     pub(crate) fn best_parent<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
         env: &Env<'_, '_, M, K>,
@@ -1081,7 +1117,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         candidates: &mut Near,
         seen: Option<NodeId>,
         meter: &Meter<'_, C>,
-    ) -> Option<NodeId> {
+    ) -> Option<(NodeId, Edge)> {
         // Each key once (a square root each), then the sort: computed inside the comparisons,
         // the keys cost about 2,000 software square roots per call of this function on a
         // Cortex-M4F, 2 ms (issue 25). Same keys, same stable sort: the same order.
@@ -1098,18 +1134,32 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         // Up to 64 segment tests: the call's deadline is checked before each (issue 25: on a
         // Cortex-M4F the tuned set's long steps made this loop run 3 ms past it). A deadline
         // passed drops the state, as a blocked neighbourhood does.
-        for &id in candidates.iter() {
-            if seen == Some(id) {
-                return Some(id);
+        let mut best: Option<(Cost, NodeId, Edge)> = None;
+        for (&id, &(key, _)) in candidates.iter().zip(keyed.iter()) {
+            if best.is_some_and(|(c, _, _)| key >= c.sort_key()) {
+                break;
             }
-            if meter.expired(&env.call) {
-                return None;
+            let p = self.pos(id);
+            if seen != Some(id) {
+                if meter.expired(&env.call) {
+                    return best.map(|(_, id, e)| (id, e));
+                }
+                if !env.free(p, x, meter) {
+                    continue;
+                }
             }
-            if env.free(self.pos(id), x, meter) {
-                return Some(id);
+            if !env.weighted() {
+                return Some((id, Edge::default()));
+            }
+            let edge = env.edge(p, x, meter);
+            let cost = self
+                .cost(id)
+                .extend(env.charged(p.dist(x), edge.class), false);
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, id, edge));
             }
         }
-        None
+        best.map(|(_, id, e)| (id, e))
     }
 }
 
@@ -1340,7 +1390,9 @@ mod tests {
             };
             let mut candidates = near.clone();
             assert_eq!(
-                store.best_parent(&env, x, &mut candidates, None, &meter),
+                store
+                    .best_parent(&env, x, &mut candidates, None, &meter)
+                    .map(|(id, _)| id),
                 parent
             );
             if parent.is_none() {

@@ -4,12 +4,14 @@
 //! Nodes live in parallel arrays of capacity `N` (struct of arrays), addressed by [`NodeId`], a
 //! `u16` newtype. Parent, first-child and sibling links are ids too, so the children of a node
 //! form an intrusive doubly linked list and no node owns a vector. Every node caches its
-//! [`Cost`]: the Euclidean length of the tree path from the root, and whether any edge of that
-//! path crosses a dynamic obstacle (the edge's *blocked* flag). The caches stay exact: changing
-//! an edge recomputes the costs of the moved subtree (a preorder walk along the links, with no
-//! stack), and re-rooting reverses the edges on the old-root-to-new-root path and recomputes all
-//! costs. A cost is always recomputed the same way (`parent cost + |parent - node|`), so cached
-//! and freshly recomputed costs agree to the bit.
+//! [`Cost`]: the length of the tree path from the root, and whether any edge of that path
+//! crosses a dynamic obstacle (the edge's *blocked* flag). An edge's length is Euclidean, or
+//! weighted by the edge's clearance class (three bits of the node's flag byte, no extra RAM)
+//! when the planner prefers clearance ([`charged`]; beyond the paper). The caches stay exact:
+//! changing an edge recomputes the costs of the moved subtree (a preorder walk along the links,
+//! with no stack), and re-rooting reverses the edges on the old-root-to-new-root path and
+//! recomputes all costs. A cost is always recomputed the same way (`parent cost + charged
+//! |parent - node|`), so cached and freshly recomputed costs agree to the bit.
 //!
 //! Resetting is O(1) (the node count drops to zero); nothing is reallocated. An operation that
 //! fails returns an error and leaves the tree exactly as it was.
@@ -21,6 +23,11 @@ use crate::geometry::Point;
 use crate::slots::{copy_slot, rd, rd_link, reverse, wr, wr_link};
 
 const NONE: u16 = u16::MAX;
+
+/// An edge's clearance class in its flag bits.
+fn class_bits(class: u8) -> u8 {
+    class.min(MAX_CLASS) << CLASS_SHIFT
+}
 
 /// Identifies a node of one [`Tree`]. Ids are dense (`0..len`) and stay valid until the tree
 /// is reset.
@@ -42,10 +49,47 @@ impl NodeId {
 #[derive(Clone, Copy, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Cost {
-    /// Euclidean length of the path from the root, in metres.
+    /// Length of the path from the root, in metres: Euclidean, each edge weighted by its
+    /// clearance class when the planner has a clearance preference ([`charged`]).
     pub length: f32,
     /// Some edge of the path crosses a dynamic obstacle.
     pub blocked: bool,
+}
+
+/// A new edge as the tree records it: whether it crosses a dynamic obstacle, and its
+/// clearance class (0-7, [`crate::Map::clearance_class`]; 0 = open space or no clearance
+/// preference), which weights its length by `1 + weight x class / 7`
+/// ([`Tree::set_clearance_weight`]). A `bool` converts to an edge of class 0 with that
+/// blocked flag.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Edge {
+    /// The edge crosses a dynamic obstacle.
+    pub blocked: bool,
+    /// Clearance class, 0-7 (larger values clamp to 7).
+    pub class: u8,
+}
+
+impl From<bool> for Edge {
+    fn from(blocked: bool) -> Self {
+        Edge { blocked, class: 0 }
+    }
+}
+
+/// Highest clearance class an edge records.
+pub const MAX_CLASS: u8 = 7;
+
+/// The length an edge of Euclidean length `len` and clearance class `class` is charged under
+/// a clearance preference of `weight`: `len` itself for class 0 (so a planner without a
+/// preference computes exactly what it did before there was one), else
+/// `len x (1 + weight x class / 7)`.
+#[inline]
+pub fn charged(len: f32, class: u8, weight: f32) -> f32 {
+    if class == 0 {
+        len
+    } else {
+        len * (1.0 + weight * f32::from(class.min(MAX_CLASS)) / f32::from(MAX_CLASS))
+    }
 }
 
 impl Cost {
@@ -130,10 +174,12 @@ pub struct Tree<const N: usize> {
     next_sibling: [u16; N],
     /// Bit 0: the edge from the parent is blocked by a dynamic obstacle. Bit 1: the cached path
     /// is blocked. Bits 2-3: the marks of the rewiring sweeps ([`Mark`]). Bit 4: the edge
-    /// crosses a cell the live overlay marked.
+    /// crosses a cell the live overlay marked. Bits 5-7: the edge's clearance class.
     flags: [u8; N],
     len: u16,
     root: u16,
+    /// The clearance preference's weight ([`charged`]).
+    weight: f32,
 }
 
 const EDGE_BLOCKED: u8 = 1;
@@ -144,6 +190,11 @@ const PATH_BLOCKED: u8 = 2;
 const EDGE_WALLED: u8 = 16;
 /// The edge is blocked, by an obstacle or by a marked cell.
 const EDGE_ANY: u8 = EDGE_BLOCKED | EDGE_WALLED;
+/// Bits 5-7: the edge's clearance class.
+const CLASS_SHIFT: u8 = 5;
+const CLASS_BITS: u8 = 0b1110_0000;
+/// What an edge carries when it is reversed (re-rooting).
+const EDGE_OWN: u8 = EDGE_ANY | CLASS_BITS;
 
 /// A per-node mark kept in the node's flag byte, for the rewiring sweeps' "seen" sets (two
 /// bits per node instead of a separate set; see [`crate::rewire`]).
@@ -177,7 +228,27 @@ impl<const N: usize> Tree<N> {
             flags: [0; N],
             len: 0,
             root: 0,
+            weight: 0.0,
         }
+    }
+
+    /// Sets the clearance preference's weight ([`charged`]; 0, the default, charges every edge
+    /// its Euclidean length) and recomputes every cost. A weight that is not finite or is
+    /// negative counts as 0.
+    pub fn set_clearance_weight(&mut self, weight: f32) {
+        self.weight = if weight.is_finite() && weight > 0.0 {
+            weight
+        } else {
+            0.0
+        };
+        if self.len > 0 {
+            self.refresh_subtree(self.root);
+        }
+    }
+
+    /// The clearance preference's weight.
+    pub fn clearance_weight(&self) -> f32 {
+        self.weight
     }
 
     /// The capacity `N`.
@@ -382,14 +453,16 @@ impl<const N: usize> Tree<N> {
         false
     }
 
-    /// Adds a node at `pos` as a child of `parent`; `edge_blocked` marks the new edge as
-    /// crossing a dynamic obstacle. `Err(Full)` when the arena is full.
+    /// Adds a node at `pos` as a child of `parent` over `edge` (a `bool` marks the new edge as
+    /// crossing a dynamic obstacle; an [`Edge`] gives its clearance class too). `Err(Full)`
+    /// when the arena is full.
     pub fn add(
         &mut self,
         pos: Point,
         parent: NodeId,
-        edge_blocked: bool,
+        edge: impl Into<Edge>,
     ) -> Result<NodeId, TreeError> {
+        let edge = edge.into();
         if !self.contains(parent) {
             return Err(TreeError::UnknownNode);
         }
@@ -403,22 +476,23 @@ impl<const N: usize> Tree<N> {
         wr(
             &mut self.flags,
             id as usize,
-            if edge_blocked { EDGE_BLOCKED } else { 0 },
+            if edge.blocked { EDGE_BLOCKED } else { 0 } | class_bits(edge.class),
         );
         self.refresh_cost(id);
         Ok(NodeId(id))
     }
 
-    /// `UpdateEdge`: makes `parent` the parent of `child` with an edge whose blocked flag is
-    /// `edge_blocked`, and updates the cached costs of the whole moved subtree. Returns the
-    /// size of the moved subtree (the work done).
+    /// `UpdateEdge`: makes `parent` the parent of `child` over `edge` (its blocked flag, and
+    /// its clearance class when an [`Edge`] is given), and updates the cached costs of the
+    /// whole moved subtree. Returns the size of the moved subtree (the work done).
     /// `Err(WouldCycle)` when `parent` lies in `child`'s subtree (which includes `child == root`).
     pub fn set_parent(
         &mut self,
         child: NodeId,
         parent: NodeId,
-        edge_blocked: bool,
+        edge: impl Into<Edge>,
     ) -> Result<usize, TreeError> {
+        let edge = edge.into();
         if !self.contains(child) || !self.contains(parent) {
             return Err(TreeError::UnknownNode);
         }
@@ -428,10 +502,18 @@ impl<const N: usize> Tree<N> {
         let c = child.0;
         self.unlink(c);
         self.link(c, parent.0);
-        self.set_flag(c, EDGE_BLOCKED, edge_blocked);
+        self.set_flag(c, EDGE_BLOCKED, edge.blocked);
         // A new edge was tested against the live cells (`free_path`).
         self.set_flag(c, EDGE_WALLED, false);
+        self.set_flag(c, CLASS_BITS, false);
+        self.set_flag(c, class_bits(edge.class), true);
         Ok(self.refresh_subtree(c))
+    }
+
+    /// The clearance class of the edge from `id`'s parent (0 for the root).
+    pub fn edge_class(&self, id: NodeId) -> Option<u8> {
+        self.contains(id)
+            .then(|| (rd(&self.flags, id.index(), 0) & CLASS_BITS) >> CLASS_SHIFT)
     }
 
     /// Sets the blocked flag of the edge from `child`'s parent and updates the subtree's costs.
@@ -497,7 +579,8 @@ impl<const N: usize> Tree<N> {
     }
 
     /// `SetRoot`: re-roots the tree at `new_root` by reversing the edges on the path from the
-    /// old root (each edge keeps its blocked flag), then recomputes every cost: O(depth + N).
+    /// old root (each edge keeps its blocked flag and clearance class), then recomputes every
+    /// cost: O(depth + N).
     pub fn set_root(&mut self, new_root: NodeId) -> Result<(), TreeError> {
         if !self.contains(new_root) {
             return Err(TreeError::UnknownNode);
@@ -510,7 +593,7 @@ impl<const N: usize> Tree<N> {
                 break;
             }
             let next = rd_link(&self.parent, cur as usize);
-            let flag = rd(&self.flags, cur as usize, 0) & EDGE_ANY;
+            let flag = rd(&self.flags, cur as usize, 0) & EDGE_OWN;
             self.unlink(cur);
             if prev != NONE {
                 self.link(cur, prev);
@@ -518,7 +601,7 @@ impl<const N: usize> Tree<N> {
             // The edge between `prev` and `cur` now hangs below `prev`; it keeps its flags,
             // which were stored at `prev` while `cur` was its parent.
             if let Some(f) = self.flags.get_mut(cur as usize) {
-                *f = (*f & !EDGE_ANY) | prev_flag;
+                *f = (*f & !EDGE_OWN) | prev_flag;
             }
             prev_flag = flag;
             prev = cur;
@@ -666,10 +749,8 @@ impl<const N: usize> Tree<N> {
             let expected = if p == NONE {
                 Cost::ZERO
             } else {
-                self.cost_of(p).extend(
-                    rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, i, Point::ZERO)),
-                    rd(&self.flags, i, 0) & EDGE_ANY != 0,
-                )
+                self.cost_of(p)
+                    .extend(self.edge_len(p, v), rd(&self.flags, i, 0) & EDGE_ANY != 0)
             };
             let cached = self.cost_of(v);
             if cached.blocked != expected.blocked
@@ -749,6 +830,13 @@ impl<const N: usize> Tree<N> {
         prev
     }
 
+    /// The charged length of the edge from `p` to its child `v` ([`charged`]).
+    fn edge_len(&self, p: u16, v: u16) -> f32 {
+        let d = rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, v as usize, Point::ZERO));
+        let class = (rd(&self.flags, v as usize, 0) & CLASS_BITS) >> CLASS_SHIFT;
+        charged(d, class, self.weight)
+    }
+
     /// Recomputes the cached cost of `v` from its parent's.
     fn refresh_cost(&mut self, v: u16) {
         let i = v as usize;
@@ -758,10 +846,9 @@ impl<const N: usize> Tree<N> {
             self.set_flag(v, PATH_BLOCKED, false);
             return;
         }
-        let c = self.cost_of(p).extend(
-            rd(&self.pos, p as usize, Point::ZERO).dist(rd(&self.pos, i, Point::ZERO)),
-            rd(&self.flags, i, 0) & EDGE_ANY != 0,
-        );
+        let c = self
+            .cost_of(p)
+            .extend(self.edge_len(p, v), rd(&self.flags, i, 0) & EDGE_ANY != 0);
         wr(&mut self.cost, i, c.length);
         self.set_flag(v, PATH_BLOCKED, c.blocked);
     }

@@ -205,17 +205,28 @@ proptest! {
     /// segment of every call keeps the whole disc clear: at least `r` from every occupied cell
     /// and the map's edge, and `R + r` from every circle's centre, by this file's distances.
     #[test]
-    fn every_waypoint_keeps_the_disc_clear(seed in 0u64..1_000_000, cell_i in 0usize..4, r_pct in 0u32..250) {
+    fn every_waypoint_keeps_the_disc_clear(
+        seed in 0u64..1_000_000,
+        cell_i in 0usize..4,
+        r_pct in 0u32..250,
+        w_i in 0usize..3,
+    ) {
         let mut rng = XorShiftRng::seed_from_u64(seed);
         let cell = [0.1f32, 0.25, 0.5, 1.0][cell_i];
         let radius = cell * r_pct as f32 / 100.0;
+        // With and without a clearance preference (a soft cost: the disc's clearance is
+        // the same hard constraint either way).
+        let weight = [0.0f32, 1.0, 4.0][w_i];
         let occ = random_map(&mut rng, usize::from(W), usize::from(H), 14);
         let bits = packed(&occ, W, H);
         let grid = OccupancyGrid::new(&bits, W, H, cell).unwrap();
+        let mut field = vec![0u8; usize::from(W) * usize::from(H)];
+        bi_am_rrt::clearance::clearance_field(&grid, radius, 3.0 * cell, &mut field).unwrap();
         let mut space = vec![0u8; bits.len()];
         let Ok(map) = Map::<'_, 4>::new(grid).with_body(radius, &mut space) else {
             return Ok(()); // no room for the disc anywhere
         };
+        let map = if weight > 0.0 { map.with_clearance(&field).unwrap() } else { map };
         let cspace = *map.live().grid();
         let comp = components(&cspace);
         // A start and a goal with room for the disc, in one component of the free space.
@@ -233,6 +244,7 @@ proptest! {
         prop_assume!(map.check_point(start).is_ok() && map.check_point(goal).is_ok());
         let mut cfg = Config::default().for_grid(&grid);
         cfg.robot_radius = radius;
+        cfg.clearance_weight = weight;
         cfg.budget.t_exp = Duration::from_millis(2);
         cfg.budget.max_expansions = 30;
         let mut storage = Box::new(Storage::<512, 64>::new());
@@ -272,6 +284,9 @@ proptest! {
                 break;
             }
         }
+        // The cached costs, clearance classes included, still match their recomputation.
+        prop_assert_eq!(p.tree().validate(), Ok(()));
+        prop_assert_eq!(p.reverse_tree().validate(), Ok(()));
     }
 }
 

@@ -20,6 +20,7 @@
 use core::time::Duration;
 
 use bi_am_rrt::builtin;
+use bi_am_rrt::clearance::clearance_field;
 use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::map::{ObstacleId, OccupancyGrid, pack_grid};
 use bi_am_rrt::metric::{DiffusionTable, ElementKind, TableHeader, write_table};
@@ -285,6 +286,25 @@ fn drive<M: Metric, const N: usize, const B: usize>(
                 return Err(format!("a planner for radius {radius} on a point's map"));
             }
             return Ok(());
+        }
+    };
+    // A clearance preference: mostly none, else a field for a margin up to four cells and a
+    // weight up to 8 (sometimes a weight without a field, which must be refused by name).
+    let mut field = vec![0u8; usize::from(grid.cols()) * usize::from(grid.rows())];
+    let map = match b.u8() % 4 {
+        0 | 1 => map,
+        2 => {
+            cfg.clearance_weight = b.unit() * 8.0;
+            map
+        }
+        _ => {
+            let margin = b.unit() * 4.0 * grid.cell_size();
+            if clearance_field(&grid, radius, margin, &mut field).is_err() {
+                return Err(format!("clearance field refused margin {margin}"));
+            }
+            cfg.clearance_weight = b.unit() * 8.0;
+            map.with_clearance(&field)
+                .map_err(|e| format!("clearance field refused: {e}"))?
         }
     };
     let rng = XorShiftRng::seed_from_u64(seed);

@@ -42,6 +42,7 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     grid: OccupancyGrid<'_>,
     overlay: &mut [u8],
     space: &mut [u8],
+    field: &mut [u8],
     metric: M,
 ) -> u32 {
     let mut cfg = black_box(Config::table1()[black_box(7usize) % 20]);
@@ -64,6 +65,17 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
         Ok(m) => m,
         Err(_) => Map::new(grid),
     };
+    // A clearance preference (issue 41): a field into an opaque buffer, and its class.
+    let map = if bi_am_rrt::clearance::clearance_field(&grid, 0.4, black_box(0.5), field).is_ok() {
+        cfg.clearance_weight = black_box(2.0);
+        match map.with_clearance(field) {
+            Ok(m) => m,
+            Err(_) => Map::new(grid),
+        }
+    } else {
+        map
+    };
+    let _ = black_box(map.clearance_class(point(), point()));
     let Ok(mut p) = Planner::<_, _, N, B, 4>::new(storage, map, metric, rng, cfg, point()) else {
         return 0;
     };
@@ -145,6 +157,7 @@ fn main() -> ! {
         let mut storage = Storage::<32, 8>::new();
         let mut overlay = [0u8; 64];
         let mut space = [0u8; 64];
+        let mut field = [0u8; 512];
         // A grid inflated on its own, and declared baked.
         let mut inflated = [0u8; 64];
         if let Ok(i) = bi_am_rrt::map::inflate(&g, black_box(0.7), black_box(&mut inflated[..])) {
@@ -165,6 +178,7 @@ fn main() -> ! {
                 g,
                 black_box(&mut overlay[..]),
                 black_box(&mut space[..]),
+                black_box(&mut field[..]),
                 t,
             );
         }
@@ -176,6 +190,7 @@ fn main() -> ! {
             g,
             black_box(&mut overlay[..]),
             black_box(&mut space[..]),
+            black_box(&mut field[..]),
             Euclidean,
         );
     }
