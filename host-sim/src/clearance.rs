@@ -100,15 +100,23 @@ pub fn segment_clearance(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> f64 {
     }
 }
 
-/// Clearance along a trail: the least over its segments, and the median over points spaced
-/// half a cell apart along it.
+/// Clearance along a trail: the least over its segments, and the median and 10th percentile
+/// over points spaced half a cell apart along it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Clearance {
     /// The least distance from the trail to a wall or the map's edge, metres.
     pub min_m: f64,
     /// The median of the distances at points half a cell apart along the trail, metres.
     pub median_m: f64,
+    /// Their 10th percentile: how close the trail's tightest tenth runs, metres.
+    pub p10_m: f64,
+    /// The least distance over the trail without its first and last metre (where the start
+    /// and the goal, often near a wall, bound it); `None` for a trail under 2 m.
+    pub inner_min_m: Option<f64>,
 }
+
+/// How far from each end [`Clearance::inner_min_m`] starts, metres.
+pub const INNER_FROM_ENDS_M: f32 = 1.0;
 
 /// [`Clearance`] of `trail` on `grid` (`None` for a trail of fewer than two points).
 pub fn trail_clearance(grid: &OccupancyGrid<'_>, trail: &[Point]) -> Option<Clearance> {
@@ -129,9 +137,26 @@ pub fn trail_clearance(grid: &OccupancyGrid<'_>, trail: &[Point]) -> Option<Clea
         }
     }
     at.sort_by(f64::total_cmp);
+    // The trail between arc lengths 1 m and L - 1 m.
+    let total: f32 = trail.windows(2).map(|w| w[0].dist(w[1])).sum();
+    let (lo, hi) = (INNER_FROM_ENDS_M, total - INNER_FROM_ENDS_M);
+    let mut inner_min_m = None::<f64>;
+    let mut s0 = 0.0f32;
+    for w in trail.windows(2) {
+        let len = w[0].dist(w[1]);
+        let (t0, t1) = ((lo - s0).max(0.0), (hi - s0).min(len));
+        if len > 0.0 && t0 < t1 {
+            let (a, b) = (w[0].lerp(w[1], t0 / len), w[0].lerp(w[1], t1 / len));
+            let d = segment_clearance(grid, a, b);
+            inner_min_m = Some(inner_min_m.map_or(d, |m| m.min(d)));
+        }
+        s0 += len;
+    }
     Some(Clearance {
         min_m,
         median_m: at[at.len() / 2],
+        p10_m: at[at.len() / 10],
+        inner_min_m,
     })
 }
 
@@ -169,7 +194,7 @@ mod tests {
         )
         .unwrap();
         assert!(
-            (c.min_m - 0.5).abs() < 1e-6 && c.median_m >= c.min_m,
+            (c.min_m - 0.5).abs() < 1e-6 && c.median_m >= c.p10_m && c.p10_m >= c.min_m,
             "{c:?}"
         );
     }

@@ -503,20 +503,51 @@ struct BodyArgs {
     /// it has, and say how far (without it such a scenario is refused, naming that position).
     #[arg(long)]
     snap_to_room: bool,
+    /// Prefer paths that keep this many metres beyond the robot's body where the space
+    /// allows (a cost that rises near walls, as nav2's inflation layer: see docs/body.md;
+    /// default: none, every edge costs its length).
+    #[arg(long, value_name = "METRES")]
+    clearance_margin: Option<f32>,
+    /// How much more a metre costs at the body's edge than in open space, with
+    /// --clearance-margin.
+    #[arg(
+        long,
+        value_name = "W",
+        default_value_t = 1.0,
+        requires = "clearance_margin"
+    )]
+    clearance_weight: f32,
 }
 
 impl BodyArgs {
     /// The scenario for the robot these flags name (unchanged without them).
     fn apply(&self, sc: maps::Scenario) -> Result<maps::Scenario> {
         let radius = self.robot_radius.unwrap_or(sc.robot_radius);
-        if self.robot_radius.is_none() && !self.snap_to_room {
-            return Ok(sc);
+        let sc = if self.robot_radius.is_none() && !self.snap_to_room {
+            sc
+        } else {
+            sc.with_body(radius, self.snap_to_room)?
+        };
+        match self.clearance_margin {
+            Some(m) => sc.with_clearance(m, self.clearance_weight),
+            None => Ok(sc),
         }
-        sc.with_body(radius, self.snap_to_room)
     }
 
     fn apply_all(&self, scs: Vec<maps::Scenario>) -> Result<Vec<maps::Scenario>> {
         scs.into_iter().map(|s| self.apply(s)).collect()
+    }
+}
+
+/// Refuses a clearance preference (`--clearance-margin`, or a scenario file's
+/// `clearance_margin_m`) on a command that cannot honour it, saying `why`.
+fn no_clearance(scs: &[maps::Scenario], why: &str) -> Result<()> {
+    match scs.iter().find(|s| s.clearance.is_some()) {
+        Some(s) => bail!(
+            "scenario {}: a clearance preference is not supported here: {why}",
+            s.name
+        ),
+        None => Ok(()),
     }
 }
 
@@ -818,6 +849,10 @@ fn main() -> Result<()> {
             }
             budgets.sort_by(f64::total_cmp);
             let mut scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
+            no_clearance(
+                &scs,
+                "bench compares path costs with OMPL's, which are lengths",
+            )?;
             for s in &mut scs {
                 s.paper_lengths = paper_lengths;
             }
@@ -917,6 +952,10 @@ fn main() -> Result<()> {
             flash_data,
         } => {
             let sc = body.apply(maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
+            no_clearance(
+                std::slice::from_ref(&sc),
+                "export does not write a clearance field yet (build one at start-up with bi_am_rrt::clearance::clearance_field)",
+            )?;
             bake::export_command(&sc, &table.options(), &out, flash_data)
         }
         Command::Bake {

@@ -300,6 +300,21 @@ pub struct Scenario {
     /// can go, to within a cell, for the metric tables, the exact optimum, OMPL and the check
     /// that every leg can be driven.
     pub reach: Option<OwnedGrid>,
+    /// The clearance preference (`--clearance-margin`, `--clearance-weight`): the field of
+    /// [`bi_am_rrt::clearance::clearance_field`] for the robot's radius, and the weight the
+    /// planner's configuration gets. `None`: every edge costs its length (the paper's).
+    pub clearance: Option<Clearance>,
+}
+
+/// A clearance preference ([`bi_am_rrt::clearance`]).
+#[derive(Clone, Debug)]
+pub struct Clearance {
+    /// Metres beyond the body over which the cost falls to the length itself.
+    pub margin: f32,
+    /// [`bi_am_rrt::Config::clearance_weight`].
+    pub weight: f32,
+    /// A byte per cell, row-major.
+    pub field: Vec<u8>,
 }
 
 #[derive(Deserialize)]
@@ -316,6 +331,12 @@ struct Entry {
     /// The robot's radius in metres (default 0: a point).
     #[serde(default)]
     robot_radius_m: Option<f32>,
+    /// A clearance preference: metres beyond the body (default: none).
+    #[serde(default)]
+    clearance_margin_m: Option<f32>,
+    /// Its weight (default 1).
+    #[serde(default)]
+    clearance_weight: Option<f32>,
     start: [f32; 2],
     goals: Vec<[f32; 2]>,
 }
@@ -422,8 +443,13 @@ pub fn scenarios_from_str(
             robot_radius: 0.0,
             space: None,
             reach: None,
+            clearance: None,
         };
         let sc = sc.with_robot_radius(e.robot_radius_m.unwrap_or(0.0))?;
+        let sc = match e.clearance_margin_m {
+            Some(m) => sc.with_clearance(m, e.clearance_weight.unwrap_or(1.0))?,
+            None => sc,
+        };
         out.push(sc);
     }
     Ok(out)
@@ -633,7 +659,11 @@ impl Scenario {
             self.goals = goals;
         }
         self.validate()?;
-        Ok(self)
+        // A clearance field is built for the radius: rebuilt for the new one.
+        match self.clearance.take() {
+            Some(c) => self.with_clearance(c.margin, c.weight),
+            None => Ok(self),
+        }
     }
 
     /// Where the robot's disc can go, to within a cell ([`Scenario::reach`]), or the map.
@@ -659,10 +689,7 @@ impl Scenario {
 
     /// The core's map of this scenario for its robot (with a body: the inflated grid, baked).
     pub fn planner_map<const K: usize>(&self) -> Result<bi_am_rrt::Map<'_, K>> {
-        let map = bi_am_rrt::Map::new(self.map.grid());
-        if self.space.is_none() {
-            return Ok(map);
-        }
+        let map = self.with_clearance_field(bi_am_rrt::Map::new(self.map.grid()))?;
         let Some(space) = &self.space else {
             return Ok(map);
         };
@@ -672,6 +699,54 @@ impl Scenario {
             .map_err(|e| anyhow::anyhow!("scenario {}: {e}", self.name))?;
         map.with_baked_body(space)
             .map_err(|e| anyhow::anyhow!("scenario {}: {e}", self.name))
+    }
+}
+
+impl Scenario {
+    /// This scenario with a clearance preference: paths keep `margin` metres beyond the
+    /// robot's body where the space allows, a metre at the body's edge costing `1 + weight`
+    /// ([`bi_am_rrt::clearance`]). Set the robot's radius first (the field is built for it).
+    /// A margin of 0 or a weight of 0 removes the preference.
+    pub fn with_clearance(mut self, margin: f32, weight: f32) -> Result<Self> {
+        if !(weight.is_finite() && weight >= 0.0) {
+            bail!(
+                "scenario {}: clearance weight {weight} (must be a finite number, not negative)",
+                self.name
+            );
+        }
+        self.clearance = None;
+        if margin == 0.0 || weight == 0.0 {
+            return Ok(self);
+        }
+        let g = self.map.grid();
+        let mut field = vec![0u8; usize::from(g.cols()) * usize::from(g.rows())];
+        bi_am_rrt::clearance::clearance_field(&g, self.robot_radius, margin, &mut field).map_err(
+            |e| anyhow::anyhow!("scenario {}: clearance margin {margin} m: {e}", self.name),
+        )?;
+        self.clearance = Some(Clearance {
+            margin,
+            weight,
+            field,
+        });
+        Ok(self)
+    }
+
+    /// `map` with the scenario's clearance field, when it has one.
+    pub fn with_clearance_field<'a, const K: usize>(
+        &'a self,
+        map: bi_am_rrt::Map<'a, K>,
+    ) -> Result<bi_am_rrt::Map<'a, K>> {
+        match &self.clearance {
+            Some(c) => map
+                .with_clearance(&c.field)
+                .map_err(|e| anyhow::anyhow!("scenario {}: {e}", self.name)),
+            None => Ok(map),
+        }
+    }
+
+    /// The weight the planner's configuration gets (0 without a preference).
+    pub fn clearance_weight(&self) -> f32 {
+        self.clearance.as_ref().map_or(0.0, |c| c.weight)
     }
 }
 
@@ -707,6 +782,7 @@ pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
         robot_radius: 0.0,
         space: None,
         reach: None,
+        clearance: None,
     }
 }
 

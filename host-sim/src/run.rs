@@ -110,8 +110,16 @@ struct GoalJson<'a> {
     #[serde(flatten)]
     row: &'a Row,
     robot_radius_m: f32,
+    /// The clearance preference's margin and weight (absent: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    clearance_margin_m: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    clearance_weight: Option<f32>,
     min_clearance_m: Option<f64>,
     median_clearance_m: Option<f64>,
+    p10_clearance_m: Option<f64>,
+    /// The least clearance without the trail's first and last metre.
+    inner_min_clearance_m: Option<f64>,
     trail: Vec<[f64; 2]>,
 }
 
@@ -343,12 +351,20 @@ pub fn run(args: &RunArgs) -> Result<()> {
             prep.scenario.robot_radius
         );
     }
+    if let Some(c) = &prep.scenario.clearance {
+        println!(
+            "  clearance preference: {} m beyond the body, weight {} (a metre at the body's edge costs {})",
+            c.margin,
+            c.weight,
+            1.0 + c.weight
+        );
+    }
     for (g, c) in rows.iter().zip(&clearances) {
         let goal = prep.scenario.show(prep.scenario.goals[g.goal_index - 1]);
         let clear = c.map_or(String::new(), |c| {
             format!(
-                ", clearance min {:.3} m / median {:.3} m",
-                c.min_m, c.median_m
+                ", clearance min {:.3} m / 10th percentile {:.3} m / median {:.3} m",
+                c.min_m, c.p10_m, c.median_m
             )
         });
         println!(
@@ -395,8 +411,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .map(|(row, c)| GoalJson {
             row,
             robot_radius_m: prep.scenario.robot_radius,
+            clearance_margin_m: prep.scenario.clearance.as_ref().map(|c| c.margin),
+            clearance_weight: prep.scenario.clearance.as_ref().map(|c| c.weight),
             min_clearance_m: c.map(|c| c.min_m),
             median_clearance_m: c.map(|c| c.median_m),
+            p10_clearance_m: c.map(|c| c.p10_m),
+            inner_min_clearance_m: c.and_then(|c| c.inner_min_m),
             trail: legs[row.goal_index - 1]
                 .iter()
                 .map(|&p| prep.scenario.user_frame(p))

@@ -206,6 +206,7 @@ fn planner_on<'s, 'm, const N: usize>(
     let rng = XorShiftRng::seed_from_u64(seed);
     let mut cfg = prep.config(cfg);
     cfg.robot_radius = prep.scenario.robot_radius;
+    cfg.clearance_weight = prep.scenario.clearance_weight();
     Planner::new(storage, map, metric, rng, cfg, start)
         .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))
 }
@@ -227,6 +228,7 @@ pub fn with_live_planner<T>(
         .with_overlay(&mut overlay)
         .and_then(|m| m.with_body(prep.scenario.robot_radius, &mut space))
         .map_err(|e| anyhow!("overlay: {e}"))?;
+    let map = prep.scenario.with_clearance_field(map)?;
     let start = prep.scenario.start;
     f(&mut planner_on(&mut storage, prep, map, cfg, seed, start)?)
 }

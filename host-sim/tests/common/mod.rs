@@ -26,5 +26,6 @@ pub fn two_doors() -> Scenario {
         robot_radius: 0.0,
         space: None,
         reach: None,
+        clearance: None,
     }
 }
