@@ -151,7 +151,9 @@ fn goals() -> &'static [(f32, f32)] {
 
 /// Flies the exported scenario on `clock`, whose ticks are cycles of a `core_hz` core (the
 /// overrun and the per-call bins are printed in those). True when every goal was reached
-/// without a collision.
+/// without a collision. Not inlined, as the twin's `mission::fly`: each mission's planner
+/// then has its own frame, popped before the next one starts.
+#[inline(never)]
 pub fn exported_mission<C: Clock>(
     storage: &mut MissionStorage,
     times: &mut CallTimes,
