@@ -603,6 +603,19 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
                 format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name)
             })?;
             sink.lock().map_err(|_| anyhow!("poisoned"))?.append(&r)?;
+            // Off a terminal the bar draws nothing: a plain line per run instead.
+            if bar.is_hidden() {
+                let reached = r.iter().filter(|row| row.reached).count();
+                eprintln!(
+                    "run {}/{}: {} on {} seed {seed}: {reached}/{} goals reached ({:.1} s)",
+                    bar.position() + 1,
+                    bar.length().unwrap_or(0),
+                    cfg.name(),
+                    preps[si].scenario.name,
+                    r.len(),
+                    bar.elapsed().as_secs_f64()
+                );
+            }
             fresh.lock().map_err(|_| anyhow!("poisoned"))?.extend(r);
             bar.inc(1);
             Ok(())

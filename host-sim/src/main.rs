@@ -487,7 +487,9 @@ enum Command {
         out: PathBuf,
     },
     /// The exact optimum of every leg of a scenario (the yardstick of travelled / optimum),
-    /// with the map's obstacle corners and the CPU time each leg took; nothing cached.
+    /// with the map's obstacle corners and the CPU time each leg took (nothing cached), and
+    /// the grid planners beside it: A* on the 8-connected grid and Theta*, length / optimum
+    /// and CPU time.
     Optimum {
         /// Scenario file.
         #[arg(long)]

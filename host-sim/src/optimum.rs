@@ -574,7 +574,8 @@ pub fn leg_optima(s: &Scenario) -> Vec<Option<f64>> {
 }
 
 /// `host-sim optimum`: each leg's exact optimum and the CPU time it took, uncached, with a
-/// line per leg as it ends.
+/// line per leg as it ends; beside it A* on the 8-connected grid and Theta* on the same cells
+/// ([`crate::grid_planners`]), their lengths / optimum and CPU times.
 pub fn report(s: &Scenario) {
     let t0 = cpu_time::ThreadTime::now().as_duration().as_secs_f64();
     let grid = s.reach_grid();
@@ -588,19 +589,39 @@ pub fn report(s: &Scenario) {
         corners.len(),
         cpu_time::ThreadTime::now().as_duration().as_secs_f64() - t0
     );
+    let cpu = || cpu_time::ThreadTime::now().as_duration().as_secs_f64();
+    type Planner = fn(&OccupancyGrid<'_>, Point, Point) -> Option<crate::grid_planners::GridPath>;
+    let planners: [(&str, Planner); 2] = [
+        ("A* (8-connected)", crate::grid_planners::astar8),
+        ("Theta*", crate::grid_planners::theta_star),
+    ];
     for (k, (a, b)) in leg_starts(s)
         .into_iter()
         .zip(s.goals.iter().copied())
         .enumerate()
     {
-        let t = cpu_time::ThreadTime::now().as_duration().as_secs_f64();
+        let t = cpu();
         let d = corners.shortest(a, b);
         println!(
-            "  leg {}: {} ({:.3} s CPU)",
+            "  leg {}: exact optimum {} ({:.3} s CPU)",
             k + 1,
             d.map_or("unreachable".to_string(), |d| format!("{d:.4} m")),
-            cpu_time::ThreadTime::now().as_duration().as_secs_f64() - t
+            cpu() - t
         );
+        // The grid planners on the same cells (module `grid_planners`).
+        for (name, plan) in planners {
+            let t = cpu();
+            let p = plan(&grid, a, b);
+            let took = cpu() - t;
+            let ratio = match (&p, d) {
+                (Some(p), Some(d)) if d > 0.0 => format!(" ({:.4} x optimum)", p.length_m / d),
+                _ => String::new(),
+            };
+            println!(
+                "    {name}: {}{ratio} ({took:.3} s CPU)",
+                p.map_or("no path".to_string(), |p| format!("{:.4} m", p.length_m)),
+            );
+        }
     }
 }
 
