@@ -63,6 +63,8 @@ pub struct ExperimentArgs {
     pub wait_from_set: bool,
     /// Work per call (`--pace`).
     pub pace: crate::results::Pace,
+    /// Skip each leg's exact optimum (`--no-optimum`: `optimal_m` and `travelled_ratio` empty).
+    pub no_optimum: bool,
     /// Parts of Algorithms 4 and 6 as printed (`--as-printed`).
     pub as_printed: bi_am_rrt::AsPrinted,
     /// The paper's Meet over every pair (`--meet-all-pairs`).
@@ -316,6 +318,32 @@ pub fn row(
     run_wall_s: f64,
 ) -> Row {
     let optimal = prep.optima().get(g.goal_index).copied().flatten();
+    row_with_optimum(
+        prep,
+        optimal,
+        cfg,
+        seed,
+        g,
+        clock,
+        final_nodes,
+        anytime_cost_m,
+        run_wall_s,
+    )
+}
+
+/// [`row`] with the leg's optimum given (`None`: not known yet, or skipped).
+#[allow(clippy::too_many_arguments)]
+pub fn row_with_optimum(
+    prep: &Prepared,
+    optimal: Option<f64>,
+    cfg: Config,
+    seed: u64,
+    g: &crate::sim::GoalRun,
+    clock: ClockKind,
+    final_nodes: usize,
+    anytime_cost_m: Option<f32>,
+    run_wall_s: f64,
+) -> Row {
     Row {
         planner: cfg.name().to_string(),
         scenario: prep.scenario.name.clone(),
@@ -503,7 +531,14 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
         .scenarios
         .iter()
         .cloned()
-        .map(|s| Prepared::with_table(s, args.table))
+        .map(|s| {
+            let p = Prepared::with_table(s, args.table);
+            if args.no_optimum {
+                p.without_optimum()
+            } else {
+                p
+            }
+        })
         .collect();
     // Bake what the planners need before timing anything.
     let maps = prepare(&preps, &planners, &pool)?;
@@ -568,6 +603,19 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
                 format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name)
             })?;
             sink.lock().map_err(|_| anyhow!("poisoned"))?.append(&r)?;
+            // Off a terminal the bar draws nothing: a plain line per run instead.
+            if bar.is_hidden() {
+                let reached = r.iter().filter(|row| row.reached).count();
+                eprintln!(
+                    "run {}/{}: {} on {} seed {seed}: {reached}/{} goals reached ({:.1} s)",
+                    bar.position() + 1,
+                    bar.length().unwrap_or(0),
+                    cfg.name(),
+                    preps[si].scenario.name,
+                    r.len(),
+                    bar.elapsed().as_secs_f64()
+                );
+            }
             fresh.lock().map_err(|_| anyhow!("poisoned"))?.extend(r);
             bar.inc(1);
             Ok(())

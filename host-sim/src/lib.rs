@@ -35,6 +35,7 @@ pub mod draw;
 #[cfg(feature = "sim")]
 pub mod experiment;
 pub mod graph;
+pub mod grid_planners;
 #[cfg(feature = "sim")]
 pub mod growth;
 pub mod maps;

@@ -87,6 +87,11 @@ enum Command {
         #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "2",
               value_parser = clap::value_parser!(u32).range(1..))]
         animate: Option<u32>,
+        /// Skip each leg's exact optimum (travelled / optimum stays empty). It is computed
+        /// after the drive, when every goal's result is already in result.json; on maps with
+        /// tens of thousands of obstacle corners it can take long.
+        #[arg(long)]
+        no_optimum: bool,
     },
     /// People walking across and along the agent's first leg (issue 27): the same walkers
     /// reported as still circles, with their velocity, and by an oracle; a door that closes
@@ -195,6 +200,10 @@ enum Command {
         /// its full t_exp on the virtual clock; needs --clock virtual).
         #[arg(long, value_enum, default_value = "full")]
         pace: host_sim::results::Pace,
+        /// Skip each leg's exact optimum (`optimal_m` and `travelled_ratio` stay empty): on maps
+        /// with tens of thousands of obstacle corners it can take long.
+        #[arg(long)]
+        no_optimum: bool,
         /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
         /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
         /// proportional to the map's size off that range; README "Lengths that follow the map").
@@ -477,6 +486,20 @@ enum Command {
         #[arg(long, default_value = "out/growth")]
         out: PathBuf,
     },
+    /// The exact optimum of every leg of a scenario (the yardstick of travelled / optimum),
+    /// with the map's obstacle corners and the CPU time each leg took (nothing cached), and
+    /// the grid planners beside it: A* on the 8-connected grid and Theta*, length / optimum
+    /// and CPU time.
+    Optimum {
+        /// Scenario file.
+        #[arg(long)]
+        scenarios: PathBuf,
+        /// Scenario name in --scenarios.
+        #[arg(long)]
+        scenario: String,
+        #[command(flatten)]
+        body: BodyArgs,
+    },
     /// Measure wall nanoseconds per unit of planner work (to calibrate the virtual clock).
     Calibrate {
         /// Runs (the median is reported).
@@ -631,6 +654,7 @@ fn main() -> Result<()> {
             t_exp_ms,
             paper_lengths,
             pace,
+            no_optimum,
         } => {
             let sc = match (scenarios, scenario) {
                 (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
@@ -651,6 +675,7 @@ fn main() -> Result<()> {
                 animate,
                 t_exp: t_exp_ms.map(std::time::Duration::from_millis),
                 pace,
+                no_optimum,
             })
         }
         Command::Moving {
@@ -705,6 +730,7 @@ fn main() -> Result<()> {
             out,
             wait_from_set,
             pace,
+            no_optimum,
             paper_lengths,
             as_printed,
             meet_all_pairs,
@@ -717,6 +743,7 @@ fn main() -> Result<()> {
             experiment::run(&ExperimentArgs {
                 wait_from_set,
                 pace,
+                no_optimum,
                 as_printed: experiment::parse_as_printed(&as_printed)?,
                 meet_all_pairs,
                 obstacle,
@@ -994,6 +1021,15 @@ fn main() -> Result<()> {
                 seed,
                 &out,
             )
+        }
+        Command::Optimum {
+            scenarios,
+            scenario,
+            body,
+        } => {
+            let sc = body.apply(maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
+            host_sim::optimum::report(&sc);
+            Ok(())
         }
         Command::Calibrate { repeats } => {
             host_sim::growth::calibrate(repeats).context("calibrating")

@@ -941,6 +941,15 @@ pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
                     prep, base, &route, kind, treatment, seed, args.t_exp, pictures,
                 ),
             };
+            // Off a terminal the bar draws nothing: a plain line per run instead.
+            if bar.is_hidden() {
+                eprintln!(
+                    "run {}/{}: {kind:?}, {treatment:?}, seed {seed} ({:.1} s)",
+                    bar.position() + 1,
+                    bar.length().unwrap_or(0),
+                    bar.elapsed().as_secs_f64()
+                );
+            }
             bar.inc(1);
             r
         })

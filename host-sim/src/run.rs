@@ -19,7 +19,7 @@ use crate::results::Row;
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::draw::{self, Animation, Painter, Scene};
 use crate::maps::Scenario;
-use crate::sim::{GoalRun, Prepared, SimPlanner, drive, with_planner};
+use crate::sim::{GoalRun, Prepared, SimPlanner, drive_each, with_planner};
 
 /// Arguments of `run`.
 pub struct RunArgs {
@@ -43,6 +43,8 @@ pub struct RunArgs {
     pub t_exp: Option<std::time::Duration>,
     /// Work per call (`--pace`).
     pub pace: crate::results::Pace,
+    /// Skip the exact optimum of each leg (`--no-optimum`).
+    pub no_optimum: bool,
 }
 
 /// A snapshot of the planner for a picture (also `moving`'s).
@@ -123,6 +125,41 @@ struct GoalJson<'a> {
     trail: Vec<[f64; 2]>,
 }
 
+/// Writes `result.json` in `out`: each row with the robot's radius, the clearance preference,
+/// the clearance of the trail it drove and the trail itself (in the scenario's frame: a ROS
+/// map's, or metres from the top-left corner, y down).
+fn write_result(
+    out: &std::path::Path,
+    prep: &Prepared,
+    rows: &[Row],
+    legs: &[Vec<Point>],
+) -> Result<()> {
+    let raw = prep.scenario.map.grid();
+    let goals_json: Vec<GoalJson<'_>> = rows
+        .iter()
+        .map(|row| {
+            let trail = &legs[row.goal_index - 1];
+            let c = crate::clearance::trail_clearance(&raw, trail);
+            GoalJson {
+                row,
+                robot_radius_m: prep.scenario.robot_radius,
+                clearance_margin_m: prep.scenario.clearance.as_ref().map(|c| c.margin),
+                clearance_weight: prep.scenario.clearance.as_ref().map(|c| c.weight),
+                min_clearance_m: c.map(|c| c.min_m),
+                median_clearance_m: c.map(|c| c.median_m),
+                p10_clearance_m: c.map(|c| c.p10_m),
+                inner_min_clearance_m: c.and_then(|c| c.inner_min_m),
+                trail: trail.iter().map(|&p| prep.scenario.user_frame(p)).collect(),
+            }
+        })
+        .collect();
+    // Written whole, then renamed: a reader never sees half a file.
+    let tmp = out.join("result.json.part");
+    std::fs::write(&tmp, serde_json::to_string_pretty(&goals_json)?)?;
+    std::fs::rename(&tmp, out.join("result.json"))?;
+    Ok(())
+}
+
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
     // A Table 1 name, optionally with the bench's `@field=value` overrides.
@@ -151,6 +188,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
     let prep = Prepared::new(args.scenario.clone());
+    let prep = if args.no_optimum {
+        prep.without_optimum()
+    } else {
+        prep
+    };
     std::fs::create_dir_all(&args.out)?;
     let goals: Vec<usize> = if args.all_goals {
         (0..prep.scenario.goals.len()).collect()
@@ -159,7 +201,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
     };
     let mut trail = vec![prep.scenario.start];
     // Each goal's driven trail, from where its leg began (result.json, clearance).
-    let mut legs: Vec<Vec<Point>> = vec![Vec::new(); prep.scenario.goals.len()];
+    let legs: std::cell::RefCell<Vec<Vec<Point>>> =
+        std::cell::RefCell::new(vec![Vec::new(); prep.scenario.goals.len()]);
     let mut disc = args.obstacle.map(crate::sim::DiscTrack::new);
     let mut avoided_drawn = false;
     let wall_clock = WallClock::new();
@@ -190,9 +233,24 @@ pub fn run(args: &RunArgs) -> Result<()> {
         )
     };
     let started = Instant::now();
+    // On a terminal, a bar per leg (calls against the leg's cap, with an ETA); elsewhere
+    // nothing but the line per goal.
+    let protocol = Protocol::default();
+    let bar = indicatif::ProgressBar::new(0).with_style(
+        indicatif::ProgressStyle::with_template(
+            "  goal {msg} [{elapsed_precise}] {bar:30} {pos}/{len} calls (at most; ETA {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     let mut failure: Option<anyhow::Error> = None;
     let (runs, final_nodes) = with_planner(&prep, cfg, args.seed, |p| {
         let hook = |p: &mut SimPlanner<'_, '_>, gi: usize, agent: Point, call: u32| {
+            if call == 0 {
+                bar.reset();
+                bar.set_length(u64::from(prep.leg_calls(gi, &protocol)));
+                bar.set_message(format!("{}/{}", gi + 1, prep.scenario.goals.len()));
+            }
+            bar.set_position(u64::from(call));
             // At the paper's pace every call lasts its full t_exp (as `experiment`).
             if paper {
                 let end = call_end
@@ -205,6 +263,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             if trail.last() != Some(&agent) {
                 trail.push(agent);
             }
+            let mut legs = legs.borrow_mut();
             let leg = &mut legs[gi];
             if leg.is_empty() {
                 leg.push(leg_starts[gi]);
@@ -266,12 +325,50 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 }
             }
         };
-        let runs: Vec<GoalRun> = match args.clock {
-            ClockKind::Wall => drive(p, &prep, &wall_clock, &goals, &Protocol::default(), hook)?,
-            ClockKind::Virtual => {
-                drive(p, &prep, &virtual_clock, &goals, &Protocol::default(), hook)?
+        // As each goal ends: a line, and result.json with the goals so far (the optimum, a
+        // separate step, comes last: a run is never lost to it).
+        let mut done: Vec<Row> = Vec::new();
+        let mut write_error: Option<anyhow::Error> = None;
+        let on_goal = |g: &GoalRun| {
+            let r = crate::experiment::row_with_optimum(
+                &prep,
+                None,
+                cfg,
+                args.seed,
+                g,
+                args.clock,
+                0,
+                None,
+                started.elapsed().as_secs_f64(),
+            );
+            bar.suspend(|| {
+                println!(
+                    "  goal {} of {}: reached {}, travelled {:.2} m, {} collisions, {} plan calls of at most {} ({:.1} s)",
+                    g.goal_index + 1,
+                    prep.scenario.goals.len(),
+                    g.result.reached,
+                    g.result.travelled,
+                    g.result.collisions,
+                    g.result.calls,
+                    prep.leg_calls(g.goal_index, &protocol),
+                    started.elapsed().as_secs_f64()
+                )
+            });
+            done.push(r);
+            if let Err(e) = write_result(&args.out, &prep, &done, &legs.borrow()) {
+                write_error.get_or_insert(e);
             }
         };
+        let runs: Vec<GoalRun> = match args.clock {
+            ClockKind::Wall => drive_each(p, &prep, &wall_clock, &goals, &protocol, hook, on_goal)?,
+            ClockKind::Virtual => {
+                drive_each(p, &prep, &virtual_clock, &goals, &protocol, hook, on_goal)?
+            }
+        };
+        bar.finish_and_clear();
+        if let Some(e) = write_error {
+            return Err(e.context("writing result.json"));
+        }
         let last = runs.last().map_or(0, |g| g.goal_index);
         let s = scene(p, &trail, &prep.scenario, last, title("the end"));
         painter.png(&s, &out.join("final.png"))?;
@@ -303,6 +400,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
     let wall_s = started.elapsed().as_secs_f64();
+    if prep.optima_if_known().is_none() && !prep.no_optimum {
+        println!(
+            "  the exact optimum of {} leg(s) (a step of its own: --no-optimum skips it) ...",
+            runs.len()
+        );
+    }
     let rows: Vec<Row> = runs
         .iter()
         .map(|g| {
@@ -340,6 +443,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         used.rewiring.root_step,
         used.search.sigma
     );
+    let legs = legs.into_inner();
     let raw = prep.scenario.map.grid();
     let clearances: Vec<_> = rows
         .iter()
@@ -403,30 +507,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(s) = prep.bake_seconds.get() {
         println!("  diffusion table baked in {s:.3} s");
     }
-    // Each row with the robot's radius, its clearance and the trail it drove (in the
-    // scenario's frame: a ROS map's, or metres from the top-left corner, y down).
-    let goals_json: Vec<GoalJson<'_>> = rows
-        .iter()
-        .zip(&clearances)
-        .map(|(row, c)| GoalJson {
-            row,
-            robot_radius_m: prep.scenario.robot_radius,
-            clearance_margin_m: prep.scenario.clearance.as_ref().map(|c| c.margin),
-            clearance_weight: prep.scenario.clearance.as_ref().map(|c| c.weight),
-            min_clearance_m: c.map(|c| c.min_m),
-            median_clearance_m: c.map(|c| c.median_m),
-            p10_clearance_m: c.map(|c| c.p10_m),
-            inner_min_clearance_m: c.and_then(|c| c.inner_min_m),
-            trail: legs[row.goal_index - 1]
-                .iter()
-                .map(|&p| prep.scenario.user_frame(p))
-                .collect(),
-        })
-        .collect();
-    std::fs::write(
-        args.out.join("result.json"),
-        serde_json::to_string_pretty(&goals_json)?,
-    )?;
+    write_result(&args.out, &prep, &rows, &legs)?;
     pictures.push("final.png".into());
     pictures.push("final.svg".into());
     println!(

@@ -46,6 +46,10 @@ pub struct Prepared {
     /// Layout of the diffusion table.
     pub table: TableOptions,
     optima: OnceLock<Vec<Option<f64>>>,
+    /// Skip the exact optimum (`--no-optimum`): every leg's optimum reads `None`.
+    pub no_optimum: bool,
+    /// Each leg's call budget ([`Prepared::leg_calls`]), once computed.
+    leg_calls: OnceLock<Vec<u32>>,
 }
 
 impl Prepared {
@@ -63,7 +67,47 @@ impl Prepared {
             bake_seconds: OnceLock::new(),
             table,
             optima: OnceLock::new(),
+            no_optimum: false,
+            leg_calls: OnceLock::new(),
         }
+    }
+
+    /// This scenario without the exact optimum (`--no-optimum`: rows leave `optimal_m` and
+    /// `travelled_ratio` empty).
+    pub fn without_optimum(mut self) -> Self {
+        self.no_optimum = true;
+        self
+    }
+
+    /// The optima if they were computed (or skipped), without computing them.
+    pub fn optima_if_known(&self) -> Option<&[Option<f64>]> {
+        self.optima.get().map(Vec::as_slice)
+    }
+
+    /// The calls the agent protocol gives leg `gi` before it gives up: the protocol's
+    /// `max_calls` (3,000), or four times the calls the leg's geodesic length over the grid of
+    /// cells with room takes at the protocol's speed when that is more (a 6 km leg through a
+    /// maze of 1 m corridors), so that the cap follows the leg, not a fixed distance. The
+    /// leg's length is its 8-connected path over the cells with room
+    /// ([`crate::graph::grid_path_length`]), computed once per leg on first use.
+    pub fn leg_calls(&self, gi: usize, protocol: &Protocol) -> u32 {
+        let lengths = self.leg_calls.get_or_init(|| {
+            let grid = self.scenario.reach_grid();
+            let starts = crate::optimum::leg_starts(&self.scenario);
+            starts
+                .iter()
+                .zip(&self.scenario.goals)
+                .map(|(&a, &b)| {
+                    // In decimetres; an unreachable leg gets the protocol's cap.
+                    crate::graph::grid_path_length(&grid, a, b)
+                        .map_or(0, |d| (d * 10.0).ceil() as u32)
+                })
+                .collect()
+        });
+        let dm = lengths.get(gi).copied().unwrap_or(0);
+        let speed = f64::from(protocol.speed.max(1e-3));
+        let need = (4.0 * f64::from(dm) / 10.0 / speed).ceil() as u32;
+        protocol.max_calls.max(need)
     }
 
     /// The grid graph (for the geodesic metric).
@@ -76,8 +120,13 @@ impl Prepared {
     /// The exact optimum of every leg (leg `k` from goal `k - 1`, or the start, to goal `k`),
     /// in metres; `None` for an unreachable goal.
     pub fn optima(&self) -> &[Option<f64>] {
-        self.optima
-            .get_or_init(|| crate::optimum::leg_optima(&self.scenario))
+        self.optima.get_or_init(|| {
+            if self.no_optimum {
+                vec![None; self.scenario.goals.len()]
+            } else {
+                crate::optimum::leg_optima(&self.scenario)
+            }
+        })
     }
 
     /// The baked diffusion table.
@@ -253,27 +302,45 @@ pub fn drive<'s, 't, C: Clock + ?Sized>(
     clock: &C,
     goals: &[usize],
     protocol: &Protocol,
+    on_call: impl FnMut(&mut SimPlanner<'s, 't>, usize, bi_am_rrt::Point, u32),
+) -> Result<Vec<GoalRun>> {
+    drive_each(planner, prep, clock, goals, protocol, on_call, |_| {})
+}
+
+/// [`drive`], calling `on_goal` as each goal's run ends (`run` writes its results goal by
+/// goal). Each leg gets [`Prepared::leg_calls`] calls.
+pub fn drive_each<'s, 't, C: Clock + ?Sized>(
+    planner: &mut SimPlanner<'s, 't>,
+    prep: &Prepared,
+    clock: &C,
+    goals: &[usize],
+    protocol: &Protocol,
     mut on_call: impl FnMut(&mut SimPlanner<'s, 't>, usize, bi_am_rrt::Point, u32),
+    mut on_goal: impl FnMut(&GoalRun),
 ) -> Result<Vec<GoalRun>> {
     let mut out = Vec::new();
     for &gi in goals {
         let goal = prep.scenario.goals[gi];
-        let result = run_to_goal(planner, clock, goal, protocol, |p, a, c| {
-            on_call(p, gi, a, c)
-        })
-        .map_err(|e| anyhow!("goal {} of {}: {e}", gi + 1, prep.scenario.name))?;
+        let leg = Protocol {
+            max_calls: prep.leg_calls(gi, protocol),
+            ..*protocol
+        };
+        let result = run_to_goal(planner, clock, goal, &leg, |p, a, c| on_call(p, gi, a, c))
+            .map_err(|e| anyhow!("goal {} of {}: {e}", gi + 1, prep.scenario.name))?;
         let search_s = result
             .search_ticks
             .map(|t| t as f64 / clock.ticks_per_second() as f64);
         let search_call_end_s = result
             .search_ticks_call_end
             .map(|t| t as f64 / clock.ticks_per_second() as f64);
-        out.push(GoalRun {
+        let run = GoalRun {
             goal_index: gi,
             result,
             search_s,
             search_call_end_s,
-        });
+        };
+        on_goal(&run);
+        out.push(run);
         if !result.reached {
             break;
         }

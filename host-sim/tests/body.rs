@@ -79,6 +79,7 @@ fn run_keeps_the_disc_clear_and_writes_the_trail() {
         animate: None,
         t_exp: Some(std::time::Duration::from_millis(5)),
         pace: host_sim::results::Pace::Full,
+        no_optimum: false,
     })
     .unwrap();
     let text = std::fs::read_to_string(dir.path().join("result.json")).unwrap();
@@ -126,6 +127,7 @@ fn a_clearance_preference_keeps_the_trail_off_the_walls() {
             animate: None,
             t_exp: Some(std::time::Duration::from_millis(5)),
             pace: host_sim::results::Pace::Full,
+            no_optimum: false,
         })
         .unwrap();
         let text = std::fs::read_to_string(dir.path().join("result.json")).unwrap();

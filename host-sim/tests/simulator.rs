@@ -80,6 +80,7 @@ fn base_args(scenarios: Vec<maps::Scenario>, planners: &str, out: &Path) -> Expe
         faithful: false,
         wait_from_set: false,
         pace: host_sim::results::Pace::Full,
+        no_optimum: false,
         as_printed: bi_am_rrt::AsPrinted::NONE,
         meet_all_pairs: false,
         obstacle: None,
@@ -104,6 +105,7 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
     let mut args = ExperimentArgs {
         repeats: 2,
         pace: host_sim::results::Pace::Paper,
+        no_optimum: false,
         search_only: true,
         ..base_args(
             maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap(),
@@ -614,6 +616,7 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
             animate: None,
             t_exp: None,
             pace: host_sim::results::Pace::Full,
+            no_optimum: false,
         };
         let e = host_sim::run::run(&args).unwrap_err().to_string();
         assert!(
@@ -639,6 +642,7 @@ fn run_draws_every_moment() {
         animate: Some(20),
         t_exp: Some(std::time::Duration::from_millis(10)),
         pace: host_sim::results::Pace::Full,
+        no_optimum: false,
     };
     host_sim::run::run(&args).unwrap();
     for f in [
@@ -772,6 +776,7 @@ fn half_metre_cells_work_end_to_end() {
         animate: None,
         t_exp: Some(std::time::Duration::from_millis(10)),
         pace: host_sim::results::Pace::Full,
+        no_optimum: false,
     })
     .unwrap();
     let result = std::fs::read_to_string(out.join("result.json")).unwrap();
@@ -1145,6 +1150,7 @@ fn regression_a_disc_that_blocks_a_joined_path_does_not_starve_the_tree() {
             seed,
             jobs: Some(1),
             pace: host_sim::results::Pace::Paper,
+            no_optimum: false,
             obstacle: Some(3.0),
             existing: Existing::Overwrite,
             ..base_args(

@@ -1,0 +1,148 @@
+//! Every map a user brings (issue 42): the agent's call budget follows the leg, `run` writes
+//! each goal's result as it ends and can skip the exact optimum, and the exact optimum keeps
+//! its figures while scaling to mazes of 1-cell corridors.
+
+use bi_am_rrt::Point;
+use bi_am_rrt::agent::Protocol;
+use host_sim::maps::{OwnedGrid, Scenario};
+
+/// A perfect maze of `n x n` rooms with 1-cell corridors and walls (`2n + 1` cells a side,
+/// cells of 1 m), carved by a seeded depth-first search; start and goal in opposite corners.
+fn maze(n: usize, seed: u64) -> Scenario {
+    let w = 2 * n + 1;
+    let mut open = vec![false; w * w];
+    let mut state = seed | 1;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut seen = vec![false; n * n];
+    let mut stack = vec![(0usize, 0usize)];
+    seen[0] = true;
+    open[w + 1] = true;
+    while let Some(&(x, y)) = stack.last() {
+        let mut nb = Vec::new();
+        for (dx, dy) in [(1i64, 0i64), (-1, 0), (0, 1), (0, -1)] {
+            let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+            if nx >= 0 && ny >= 0 && (nx as usize) < n && (ny as usize) < n {
+                let (nx, ny) = (nx as usize, ny as usize);
+                if !seen[ny * n + nx] {
+                    nb.push((nx, ny));
+                }
+            }
+        }
+        if nb.is_empty() {
+            stack.pop();
+            continue;
+        }
+        let (nx, ny) = nb[(next() % nb.len() as u64) as usize];
+        seen[ny * n + nx] = true;
+        open[(2 * ny + 1) * w + 2 * nx + 1] = true;
+        open[(y + ny + 1) * w + x + nx + 1] = true;
+        stack.push((nx, ny));
+    }
+    let map = OwnedGrid::from_fn(w as u16, w as u16, 1.0, |c, r| {
+        !open[usize::from(r) * w + usize::from(c)]
+    })
+    .unwrap();
+    let far = w as f32 - 1.5;
+    Scenario {
+        name: format!("maze{w}"),
+        map,
+        source: "test".into(),
+        start: Point::new(1.5, 1.5),
+        goals: vec![Point::new(far, far), Point::new(far, far - 2.0)],
+        sigma: 30.0,
+        ros_origin: None,
+        paper_lengths: false,
+        robot_radius: 0.0,
+        space: None,
+        reach: None,
+        clearance: None,
+    }
+}
+
+/// The call budget follows the leg: a leg through a maze longer than 3,000 calls at 0.7 m a
+/// call gets four times the calls its grid path takes; a short leg keeps the protocol's 3,000.
+#[test]
+fn the_call_budget_follows_the_leg() {
+    let prep = host_sim::sim::Prepared::new(maze(64, 7));
+    let protocol = Protocol::default();
+    let long = prep.leg_calls(0, &protocol);
+    let grid = prep.scenario.map.grid();
+    let length =
+        host_sim::graph::grid_path_length(&grid, prep.scenario.start, prep.scenario.goals[0])
+            .unwrap();
+    println!("leg 1: grid path {length:.1} m, {long} calls");
+    assert!(length > 600.0, "a maze leg is long ({length} m)");
+    let want = 4.0 * length / 0.7;
+    assert!(
+        f64::from(long) >= want - 1.0 && f64::from(long) <= want + 2.0,
+        "{long} calls for {want:.1}"
+    );
+    // Two cells apart (the second goal from the first): the protocol's cap.
+    assert_eq!(prep.leg_calls(1, &protocol), 3000);
+}
+
+/// `run --no-optimum` writes every goal's row with the optimum left empty; a run with the
+/// optimum has the same trail and fills it in.
+#[test]
+fn run_writes_each_goal_and_can_skip_the_optimum() {
+    let go = |no_optimum: bool| -> Vec<serde_json::Value> {
+        let dir = tempfile::tempdir().unwrap();
+        let sc = maze(6, 3);
+        host_sim::run::run(&host_sim::run::RunArgs {
+            scenario: sc,
+            planner: "Bi-AM-RRT*(D) tuned".into(),
+            all_goals: true,
+            seed: 2,
+            clock: host_sim::clock::ClockKind::Virtual,
+            obstacle: None,
+            out: dir.path().to_path_buf(),
+            animate: None,
+            t_exp: Some(std::time::Duration::from_millis(5)),
+            pace: host_sim::results::Pace::Full,
+            no_optimum,
+        })
+        .unwrap();
+        let text = std::fs::read_to_string(dir.path().join("result.json")).unwrap();
+        assert!(!dir.path().join("result.json.part").exists());
+        serde_json::from_str(&text).unwrap()
+    };
+    let (skipped, full) = (go(true), go(false));
+    assert_eq!(skipped.len(), 2);
+    for (s, f) in skipped.iter().zip(&full) {
+        assert_eq!(s["reached"], true, "{s}");
+        assert!(
+            s["optimal_m"].is_null() && s["travelled_ratio"].is_null(),
+            "{s}"
+        );
+        assert!(f["optimal_m"].as_f64().unwrap() > 0.0, "{f}");
+        assert_eq!(s["trail"], f["trail"], "the same run either way");
+    }
+}
+
+/// The exact optimum of a maze of 1-cell corridors is the grid path's length less what the
+/// corners let it cut: never longer than the centre path, never shorter than the straight
+/// line, and found (the old search did not finish on a 129-cell maze in ten minutes).
+#[test]
+fn the_optimum_of_a_one_cell_maze() {
+    let sc = maze(32, 11);
+    let grid = sc.map.grid();
+    let corners = host_sim::optimum::Corners::of(&grid);
+    let (a, b) = (sc.start, sc.goals[0]);
+    let t0 = std::time::Instant::now();
+    let d = corners.shortest(a, b).unwrap();
+    let centre = host_sim::graph::grid_path_length(&grid, a, b).unwrap();
+    println!(
+        "maze 65: optimum {d:.3} m, grid path {centre:.3} m, {} corners, {:?}",
+        corners.len(),
+        t0.elapsed()
+    );
+    assert!(
+        d >= f64::from(a.dist(b)) && d <= centre * 1.01 + 1.0,
+        "{d} vs {centre}"
+    );
+}
