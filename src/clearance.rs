@@ -228,11 +228,16 @@ mod tests {
         let g = walled(&mut bits);
         let mut f = [0u8; 200];
         clearance_field(&g, 0.0, 2.0, &mut f).unwrap();
-        let along = |y: f32| class_of(&g, &f, Point::new(1.0, y), Point::new(9.0, y)).0;
+        // From x = 3 to 7 m: more than the margin from the map's side edges.
+        let along = |y: f32| class_of(&g, &f, Point::new(3.0, y), Point::new(7.0, y)).0;
         let (near, mid, far) = (along(0.6), along(1.6), along(2.6));
         assert!(near > mid && mid >= far, "{near} {mid} {far}");
         assert_eq!(far, 0);
         assert!(near <= MAX_CLASS);
+        // The closest approach counts, however short: an edge far from the wall but for one
+        // end costs as one along it.
+        let graze = class_of(&g, &f, Point::new(3.0, 2.6), Point::new(7.0, 0.6)).0;
+        assert_eq!(graze, near);
     }
 
     #[test]
