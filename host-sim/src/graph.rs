@@ -25,71 +25,13 @@ pub fn neighbour_offsets() -> Vec<(i32, i32)> {
     v
 }
 
-/// The length in metres of the shortest 8-connected path over the free cells of `grid` from
-/// the cell of `a` to the cell of `b` (steps of 1 and sqrt 2 cells, a diagonal only between two
-/// free side cells), or `None` when there is none: Dial's bucket queue on integer weights 5
-/// and 7 (so the figure is within 1 % of the grid path's length), stopped when `b`'s cell is
-/// settled. O(cells) time and four bytes a cell; the agent protocol's call budget per leg
-/// follows it ([`crate::sim::Prepared::leg_calls`]).
+/// The length in metres of a shortest 8-connected path over the free cells of `grid` from
+/// `a` through the centres of their cells to `b` (steps of 1 and sqrt 2 cells, a diagonal only
+/// between two free side cells), or `None` when there is none: the A* of
+/// [`crate::grid_planners::astar8`]. The agent protocol's call budget per leg follows it
+/// ([`crate::sim::Prepared::leg_calls`]).
 pub fn grid_path_length(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> Option<f64> {
-    let (cols, rows) = (grid.cols() as usize, grid.rows() as usize);
-    let (ca, cb) = (grid.cell_of(a)?, grid.cell_of(b)?);
-    let idx = |c: u16, r: u16| r as usize * cols + c as usize;
-    let free = |c: i64, r: i64| {
-        c >= 0
-            && r >= 0
-            && (c as usize) < cols
-            && (r as usize) < rows
-            && !grid.is_occupied(c as u16, r as u16)
-    };
-    if !free(ca.0.into(), ca.1.into()) || !free(cb.0.into(), cb.1.into()) {
-        return None;
-    }
-    let (src, dst) = (idx(ca.0, ca.1), idx(cb.0, cb.1));
-    let mut dist = vec![u32::MAX; cols * rows];
-    // Buckets modulo 8 (> the largest weight, 7): Dial's algorithm.
-    let mut buckets: [Vec<usize>; 8] = Default::default();
-    dist[src] = 0;
-    buckets[0].push(src);
-    let mut d = 0u32;
-    let mut pending = 1usize;
-    while pending > 0 {
-        let slot = (d % 8) as usize;
-        while let Some(u) = buckets[slot].pop() {
-            pending -= 1;
-            if dist[u] != d {
-                continue;
-            }
-            if u == dst {
-                return Some(f64::from(d) / 5.0 * f64::from(grid.cell_size()));
-            }
-            let (c, r) = ((u % cols) as i64, (u / cols) as i64);
-            for (dx, dy) in [
-                (1, 0),
-                (-1, 0),
-                (0, 1),
-                (0, -1),
-                (1, 1),
-                (1, -1),
-                (-1, 1),
-                (-1, -1),
-            ] {
-                let (nc, nr) = (c + dx, r + dy);
-                if !free(nc, nr) || (dx != 0 && dy != 0 && !(free(c + dx, r) && free(c, r + dy))) {
-                    continue;
-                }
-                let v = nr as usize * cols + nc as usize;
-                let nd = d + if dx != 0 && dy != 0 { 7 } else { 5 };
-                if nd < dist[v] {
-                    dist[v] = nd;
-                    buckets[(nd % 8) as usize].push(v);
-                    pending += 1;
-                }
-            }
-        }
-        d += 1;
-    }
-    None
+    crate::grid_planners::astar8(grid, a, b).map(|p| p.length_m)
 }
 
 /// The connected components of the free cells (4-neighbours; the same components as the

@@ -18,10 +18,11 @@
 //! and a segment is walked crossing by crossing and dropped at its first blocked piece, the
 //! core's span test answering for long free ones. The figures are those of the plain search to
 //! the bit (`the_bound_changes_no_figure`, 400 random maps). `host-sim optimum` prints each
-//! leg's figure and CPU time: on nav2's warehouse (1,006 x 1,674 cells) 0.5 s for the longest
-//! leg (10 s with the bound alone), a 1,024-cell map of 900 blocks 0.2 s a leg, a 129-cell
-//! maze of 1-cell corridors 0.4-0.5 s a leg (about 700 s before), a 511-cell one 23-40 s a
-//! leg (45,000 corners: the scan of every candidate corner per expansion is what remains).
+//! leg's figure and CPU time: on nav2's warehouse (1,006 x 1,674 cells) about 1 s for the
+//! longest leg (10 s with the bound alone), a 1,024-cell map of 900 blocks 0.2 s a leg, a
+//! 129-cell maze of 1-cell corridors 0.1-0.2 s a leg (about 700 s before), a 511-cell one
+//! 25-40 s a leg (45,000 corners: the scan of every candidate corner per expansion is what
+//! remains).
 //!
 //! Checked against the exact optima of the 24 reference legs in
 //! `../shared/anchors/reference-figures.md` (test `optima_match_the_reference_figures`).
@@ -273,10 +274,11 @@ impl Corners {
         if self.sees(s, g) {
             return Some(dist(s, g) * self.cell);
         }
-        // Above the bound by a relative 1e-9: a corner path exactly as long stays in.
+        // Above the bound by a relative 1e-6 (the centre path's points are f32 metres): a
+        // corner path as long stays in.
         let bound = self
             .centre_path(s, g)
-            .map_or(f64::INFINITY, |u| u * (1.0 + 1e-9) + 1e-9);
+            .map_or(f64::INFINITY, |u| u * (1.0 + 1e-6) + 1e-6);
         type Xy = (f64, f64);
         let (cand, quad): (Vec<Xy>, Vec<Xy>) = self
             .corners
@@ -337,96 +339,19 @@ impl Corners {
 
     /// The length (cell units) of a path from `s` to `g` over free cell centres: `s` to its
     /// cell's centre, 8-connected steps between free centres (a diagonal only between two free
-    /// side cells, so every step's segment is free), the goal cell's centre to `g`. The steps
-    /// are those of Dial's shortest path on weights 5 and 7; the length is measured on the
-    /// path itself (1 and sqrt 2 a step), so it is a real path's and no shorter than the
+    /// side cells, so every step's segment is free), the goal cell's centre to `g`
+    /// ([`crate::grid_planners::astar8`]). A real path's length, so no shorter than the
     /// optimum. `None` when either end's cell is occupied or no such path exists.
     fn centre_path(&self, s: (f64, f64), g: (f64, f64)) -> Option<f64> {
-        let cell_of = |p: (f64, f64)| -> Option<(i64, i64)> {
-            let (c, r) = (p.0.floor() as i64, p.1.floor() as i64);
-            let (c, r) = (c.min(self.cols - 1), r.min(self.rows - 1));
-            (c >= 0 && r >= 0 && !self.occ(c, r)).then_some((c, r))
-        };
-        let (cs, cg) = (cell_of(s)?, cell_of(g)?);
-        let cols = self.cols;
-        let idx = |c: i64, r: i64| (r * cols + c) as usize;
-        const STEPS: [(i64, i64); 8] = [
-            (1, 0),
-            (-1, 0),
-            (0, 1),
-            (0, -1),
-            (1, 1),
-            (1, -1),
-            (-1, 1),
-            (-1, -1),
-        ];
-        let cells = (self.cols * self.rows) as usize;
-        let mut dist = vec![u32::MAX; cells];
-        // The step that reached each cell (index into STEPS), 8 for the source.
-        let mut from = vec![u8::MAX; cells];
-        let mut buckets: [Vec<usize>; 8] = Default::default();
-        let (src, dst) = (idx(cs.0, cs.1), idx(cg.0, cg.1));
-        dist[src] = 0;
-        from[src] = 8;
-        buckets[0].push(src);
-        let (mut d, mut pending) = (0u32, 1usize);
-        let mut found = false;
-        'search: while pending > 0 {
-            let slot = (d % 8) as usize;
-            while let Some(u) = buckets[slot].pop() {
-                pending -= 1;
-                if dist[u] != d {
-                    continue;
-                }
-                if u == dst {
-                    found = true;
-                    break 'search;
-                }
-                let (c, r) = ((u as i64) % cols, (u as i64) / cols);
-                for (k, &(dx, dy)) in STEPS.iter().enumerate() {
-                    let (nc, nr) = (c + dx, r + dy);
-                    let free = |c: i64, r: i64| {
-                        c >= 0 && r >= 0 && c < self.cols && r < self.rows && !self.occ(c, r)
-                    };
-                    if !free(nc, nr) || (k >= 4 && !(free(c + dx, r) && free(c, r + dy))) {
-                        continue;
-                    }
-                    let v = idx(nc, nr);
-                    let nd = d + if k >= 4 { 7 } else { 5 };
-                    if nd < dist[v] {
-                        dist[v] = nd;
-                        from[v] = k as u8;
-                        buckets[(nd % 8) as usize].push(v);
-                        pending += 1;
-                    }
-                }
-            }
-            d += 1;
-        }
-        if !found {
-            return None;
-        }
-        let (mut straight, mut diagonal) = (0u64, 0u64);
-        let mut v = dst;
-        while from[v] != 8 {
-            let k = from[v] as usize;
-            let (dx, dy) = STEPS[k];
-            if k >= 4 {
-                diagonal += 1;
-            } else {
-                straight += 1;
-            }
-            let (c, r) = ((v as i64) % cols - dx, (v as i64) / cols - dy);
-            v = idx(c, r);
-        }
-        let centre = |(c, r): (i64, i64)| (c as f64 + 0.5, r as f64 + 0.5);
-        let end = |p: (f64, f64), q: (f64, f64)| ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt();
-        Some(
-            end(s, centre(cs))
-                + straight as f64
-                + diagonal as f64 * std::f64::consts::SQRT_2
-                + end(centre(cg), g),
+        let grid = OccupancyGrid::new(
+            &self.bits,
+            self.cols as u16,
+            self.rows as u16,
+            self.cell as f32,
         )
+        .ok()?;
+        let m = |p: (f64, f64)| Point::new((p.0 * self.cell) as f32, (p.1 * self.cell) as f32);
+        crate::grid_planners::astar8(&grid, m(s), m(g)).map(|p| p.length_m / self.cell)
     }
 
     /// The search as it was before the bound (every corner a candidate; the same answers):
