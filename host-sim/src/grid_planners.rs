@@ -7,11 +7,12 @@
 //! the core's segment test on the same grid. `host-sim optimum` prints their lengths and CPU
 //! times next to the exact optimum.
 
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
+
+use crate::optimum::Open;
 
 /// A grid planner's answer: the path's length in metres, and its points.
 #[derive(Clone, Debug)]
@@ -115,8 +116,8 @@ pub fn theta_star(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> Option<GridPa
     let si = idx(s);
     cost[si] = 0.0;
     parent[si] = si;
-    open.push(Entry(h(si), si));
-    while let Some(Entry(_, u)) = open.pop() {
+    open.push(Open(h(si), si));
+    while let Some(Open(_, u)) = open.pop() {
         if closed[u] {
             continue;
         }
@@ -145,29 +146,11 @@ pub fn theta_star(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> Option<GridPa
             if c < cost[v] {
                 cost[v] = c;
                 parent[v] = via;
-                open.push(Entry(c + h(v), v));
+                open.push(Open(c + h(v), v));
             }
         }
     }
     None
-}
-
-/// A queue entry: (f, cell), smallest f first.
-#[derive(PartialEq)]
-struct Entry(f64, usize);
-
-impl Eq for Entry {}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
-    }
 }
 
 #[cfg(test)]

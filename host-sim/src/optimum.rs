@@ -437,9 +437,9 @@ fn round_nn(x: f64) -> f64 {
     }
 }
 
-/// An A* queue entry: (f, node), smallest f first.
+/// An A* queue entry: (f, node), smallest f first (also Theta*'s, `grid_planners`).
 #[derive(PartialEq)]
-struct Open(f64, usize);
+pub(crate) struct Open(pub(crate) f64, pub(crate) usize);
 
 impl Eq for Open {}
 
