@@ -262,10 +262,12 @@ impl Corners {
     /// The length in metres of the shortest path from `a` to `b` (positions in metres), or
     /// `None` when the goal cannot be reached.
     ///
-    /// A* over the visibility graph, with two prunings that keep it exact: a path over cell
-    /// centres ([`Corners::centre_path`], a real path, so no shorter than the optimum) bounds
-    /// the search, so only the corners inside the ellipse of foci `a` and `b` whose lengths
-    /// sum to that bound take part, and an edge is tested only when it can still beat it.
+    /// A* over the visibility graph, with prunings that keep it exact (module docs): a path
+    /// over cell centres (A* on the 8-connected grid: a real path, so no shorter than the
+    /// optimum) bounds the search, so only the corners inside the ellipse of foci `a` and `b`
+    /// whose lengths sum to that bound take part; an edge is tested only when it can still
+    /// beat the bound and the goal's label; and from a corner only the edges that keep the
+    /// path taut round its occupied cell.
     pub fn shortest(&self, a: Point, b: Point) -> Option<f64> {
         let s = (a.x as f64 / self.cell, a.y as f64 / self.cell);
         let g = (b.x as f64 / self.cell, b.y as f64 / self.cell);
