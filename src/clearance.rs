@@ -16,6 +16,10 @@
 //! [`crate::Config::clearance_weight`]). Class 0 costs the length itself, so a planner with
 //! weight 0 computes bit for bit what it did before there was a preference.
 //!
+//! The preference is built with the crate's `clearance` feature (off by default, so that a
+//! firmware that does not use it carries none of its code); the field builder and the class
+//! are always there, the planner charges classes only with the feature.
+//!
 //! The preference is soft: walls, live cells and dynamic discs stay hard constraints (the body,
 //! [`crate::map`]); the field reads the static grid only (live cells and obstacles do not
 //! raise it). Heuristics that need a lower bound (the informed ellipse, the goal estimates)

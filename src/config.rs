@@ -368,7 +368,8 @@ pub struct Config {
     /// more a metre costs at the body's edge than in open space, the cost falling to the
     /// length itself at the margin the map's clearance field was built for
     /// ([`crate::clearance`], [`crate::Map::with_clearance`]). 1 makes a metre along a wall
-    /// cost up to 2; paths then keep off walls where the space allows, at some length.
+    /// cost up to 2; paths then keep off walls where the space allows, at some length. Needs
+    /// the crate's `clearance` feature.
     pub clearance_weight: f32,
 }
 

@@ -137,7 +137,8 @@ pub enum SetupError {
     /// inflated for (`Map::with_body`, `Map::with_baked_body`; 0 without a body).
     Body,
     /// The configuration's `clearance_weight` is above 0 but the map has no clearance field
-    /// (`Map::with_clearance`): the preference would silently do nothing.
+    /// (`Map::with_clearance`), or the crate was built without its `clearance` feature: the
+    /// preference would silently do nothing.
     Clearance,
 }
 
@@ -151,7 +152,7 @@ impl core::fmt::Display for SetupError {
                 "robot_radius exceeds the radius the map was inflated for (Map::with_body)",
             ),
             Self::Clearance => f.write_str(
-                "clearance_weight is set but the map has no clearance field (Map::with_clearance)",
+                "clearance_weight is set but the map has no clearance field (Map::with_clearance) or the crate lacks its `clearance` feature",
             ),
             Self::Map => {
                 f.write_str("map scale out of range: squared distances overflow or vanish in f32")

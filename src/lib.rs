@@ -17,6 +17,8 @@
 //! - [`map`]: the occupancy grid borrowed from bit-packed bytes (flash-friendly), dynamic
 //!   circular obstacles (still, or moving with a reported velocity), the exact `free_path`
 //!   collision test, and the robot's body (a disc: the grid inflated once, exact near walls).
+//! - [`clearance`]: the clearance preference, a field of a byte per cell and each edge's
+//!   class (beyond the paper; feature `clearance`).
 //! - [`tree`]: the fixed-capacity tree arena with cached, blocked-aware path costs, edge
 //!   updates and re-rooting.
 //! - [`index`]: the bucket-grid spatial index for `Nearest` and `Nearby`.
@@ -74,6 +76,8 @@
 //!   counter (Cortex-M3 and up).
 //! - `embassy-time`: `clock::EmbassyClock`, a [`clock::Clock`] on `embassy_time::Instant`
 //!   for firmware built on Embassy (the application provides the time driver).
+//! - `clearance`: the clearance preference ([`clearance`], `Config::clearance_weight`): paths
+//!   keep off walls where the space allows. Off by default (3.2 KB of flash when on).
 //!
 //! ## Randomness on the chip
 //!

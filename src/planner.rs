@@ -308,7 +308,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if cfg.robot_radius > map.radius() {
             return Err(SetupError::Body);
         }
-        if cfg.clearance_weight > 0.0 && !map.has_clearance() {
+        if cfg.clearance_weight > 0.0 && !(cfg!(feature = "clearance") && map.has_clearance()) {
             return Err(SetupError::Clearance);
         }
         map.check_point(start)?;
@@ -1128,7 +1128,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// The clearance class of a new edge `a-b` (0 without a clearance preference), charged.
     fn clearance_class<C: Clock + ?Sized>(&self, a: Point, b: Point, meter: &Meter<'_, C>) -> u8 {
-        if self.cfg.clearance_weight <= 0.0 {
+        if !cfg!(feature = "clearance") || self.cfg.clearance_weight <= 0.0 {
             return 0;
         }
         let (class, work) = self.map.clearance_class(a, b);

@@ -264,11 +264,12 @@ impl<M: Metric, const K: usize> Env<'_, '_, M, K> {
         free
     }
 
-    /// Whether the planner prefers clearance ([`crate::Config::clearance_weight`] above 0; the
-    /// planner refuses a weight without a clearance field).
+    /// Whether the planner prefers clearance ([`crate::Config::clearance_weight`] above 0, and
+    /// the crate's `clearance` feature on; the planner refuses a weight without a clearance
+    /// field or without the feature).
     #[inline]
     pub fn weighted(&self) -> bool {
-        self.cfg.clearance_weight > 0.0
+        cfg!(feature = "clearance") && self.cfg.clearance_weight > 0.0
     }
 
     /// A new free edge `a-b` as the tree records it: its clearance class, charged by the

@@ -3,7 +3,9 @@
 //! graze, at a small cost in length (by this file's own distances); the tree's weighted costs
 //! stay exact through re-rooting; bad input gets named errors.
 //!
-//! Deterministic: seeded generators and a fake clock.
+//! Deterministic: seeded generators and a fake clock. Needs the `clearance` feature (the
+//! workspace's tests have it: host-sim turns it on).
+#![cfg(feature = "clearance")]
 
 use std::time::Duration;
 

@@ -297,7 +297,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             cfg.clearance_weight = b.unit() * 8.0;
             map
         }
-        _ => {
+        _ if cfg!(feature = "clearance") => {
             let margin = b.unit() * 4.0 * grid.cell_size();
             if clearance_field(&grid, radius, margin, &mut field).is_err() {
                 return Err(format!("clearance field refused margin {margin}"));
@@ -306,6 +306,7 @@ fn drive<M: Metric, const N: usize, const B: usize>(
             map.with_clearance(&field)
                 .map_err(|e| format!("clearance field refused: {e}"))?
         }
+        _ => map,
     };
     let rng = XorShiftRng::seed_from_u64(seed);
     let Ok(mut p) = Planner::new(&mut storage, map, metric, rng, cfg, start) else {
