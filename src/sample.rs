@@ -63,18 +63,24 @@ pub fn ellipse_free<R: Rng + ?Sized, const K: usize>(
 /// Ellipse draws until one is a free state in a narrow passage (a cell with occupied cells
 /// within `reach` cells on both sides along its row or its column), at most `attempts` of
 /// them. Returns that state (`None` if no draw was narrow), the first free state drawn (the
-/// fallback when none was narrow) and the number of draws made.
+/// fallback when none was narrow) and the number of draws made. Before each further
+/// [`NARROW_BATCH`] draws, `go_on(NARROW_BATCH)` is asked whether to continue (the caller
+/// charges the draws and looks at its deadline); on `false` the draws stop with neither state.
 pub fn narrow_free<R: Rng + ?Sized, const K: usize>(
     rng: &mut R,
     map: &Map<'_, K>,
     ellipse: &Ellipse,
     reach: u16,
     attempts: u16,
+    mut go_on: impl FnMut(u16) -> bool,
 ) -> (Option<Point>, Option<Point>, u16) {
     let live = map.live();
     let grid = map.grid();
     let mut first = None;
     for n in 0..attempts {
+        if n > 0 && n % NARROW_BATCH == 0 && !go_on(NARROW_BATCH) {
+            return (None, None, n);
+        }
         let p = ellipse.sample(rng);
         let Some((c, r)) = grid.cell_of(p) else {
             continue;
@@ -91,6 +97,9 @@ pub fn narrow_free<R: Rng + ?Sized, const K: usize>(
     }
     (None, first, attempts)
 }
+
+/// Draws [`narrow_free`] makes between two questions to its caller.
+pub const NARROW_BATCH: u16 = 16;
 
 /// One draw of `X_s` (module docs). `p_goal` and `p_uniform` are the two thresholds.
 pub(crate) fn sample_state<R: Rng + ?Sized, const K: usize>(
@@ -163,7 +172,7 @@ mod tests {
         let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
         let (mut narrow, mut fallbacks) = (0, 0);
         for _ in 0..200 {
-            let (n, first, draws) = narrow_free(&mut rng, &map, &e, 2, 256);
+            let (n, first, draws) = narrow_free(&mut rng, &map, &e, 2, 256, |_| true);
             assert!((1..=256).contains(&draws));
             match n {
                 Some(p) => {

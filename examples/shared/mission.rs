@@ -5,7 +5,7 @@ use core::fmt;
 
 use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use bi_am_rrt::builtin;
-use bi_am_rrt::clock::FakeClock;
+use bi_am_rrt::clock::{Clock, FakeClock};
 use bi_am_rrt::config::PlannerName;
 use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Storage};
 use rand_core::SeedableRng;
@@ -80,7 +80,9 @@ pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
     let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
     let result = run_to_goal(
         &mut planner,
-        &clock,
+        // As a `dyn Clock`, like the office mission's real clock: one copy of the planner's
+        // code serves both (examples/firmware.rs).
+        &clock as &dyn Clock,
         scenario.goals[0],
         &Protocol::default(),
         |_, _, _| {},

@@ -154,7 +154,7 @@ fn goals() -> &'static [(f32, f32)] {
 /// without a collision. Not inlined, as the twin's `mission::fly`: each mission's planner
 /// then has its own frame, popped before the next one starts.
 #[inline(never)]
-pub fn exported_mission<C: Clock>(
+pub fn exported_mission<C: Clock + ?Sized>(
     storage: &mut MissionStorage,
     times: &mut CallTimes,
     clock: &C,
