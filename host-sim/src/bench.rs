@@ -158,6 +158,8 @@ pub struct BenchArgs {
     /// next query's caches are then those a first-solution search left, on both sides. No
     /// costs are read.
     pub until_first: bool,
+    /// Also run the grid planners (A* on the 8-connected grid and Theta*) on every leg.
+    pub grid: bool,
 }
 
 /// Bytes written and read back by [`flush_caches`]: several times any last-level cache of
@@ -293,6 +295,13 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         {
             prep.diffusion()?;
         }
+        for v in &args.variants {
+            let last = args.budgets.last().copied().unwrap_or(0.0);
+            prep.warn_narrow_legs(v.cfg, &|k| {
+                (args.legs.is_empty() || args.legs.contains(&(k + 1)))
+                    .then(|| format!("within {last} s"))
+            });
+        }
         let optima = prep.optima();
         let starts = leg_starts(s);
         for (k, (&start, &goal)) in starts.iter().zip(&s.goals).enumerate() {
@@ -312,6 +321,12 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                     .collect();
                 equal_at = median(&mut t).filter(|t| t.is_finite()).map(|t| t * 1e-6);
                 for row in theirs {
+                    writeln!(csv, "{}", csv_line(&row))?;
+                    rows.push(row);
+                }
+            }
+            if args.grid {
+                for row in grid_leg(s, leg, start, goal, opt, args) {
                     writeln!(csv, "{}", csv_line(&row))?;
                     rows.push(row);
                 }
@@ -378,6 +393,12 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
     let md = summary_markdown(&summary, &args.budgets);
     std::fs::write(args.out.join("summary.md"), &md)?;
     print!("{md}");
+    if args.grid {
+        let budgets: &[f64] = if args.until_first { &[] } else { &args.budgets };
+        let grid = grid_markdown(&rows, budgets);
+        std::fs::write(args.out.join("grid.md"), &grid)?;
+        print!("\n{grid}");
+    }
     if args.ompl.is_some() {
         // Until the first solution: no costs to compare.
         let budgets: &[f64] = if args.until_first { &[] } else { &args.budgets };
@@ -509,6 +530,76 @@ fn ompl_leg(
         }
     }
     Ok(rows)
+}
+
+/// The grid planners' names in the output ([`crate::grid_planners`]).
+pub const GRID_ASTAR: &str = "A* (8-connected)";
+/// Theta*'s name in the output.
+pub const GRID_THETA_STAR: &str = "Theta*";
+
+/// Whether a row is a baseline's (OMPL's or a grid planner's), not one of our planners'.
+pub fn is_baseline(planner: &str) -> bool {
+    planner.starts_with("OMPL ") || planner == GRID_ASTAR || planner == GRID_THETA_STAR
+}
+
+/// Queries of each grid planner per leg: they are deterministic, so repeats only give the
+/// time a median.
+const GRID_REPEATS: u64 = 5;
+
+/// A* on the 8-connected grid and Theta* on one leg ([`crate::grid_planners`]: the cells
+/// with room for the robot's body, as OMPL's and ours), `min(seeds, 5)` queries each, cold
+/// like ours with `--cold`: one row per query, its thread CPU time as the first-solution time
+/// and its path / optimum as the first path (no costs at budgets: a grid planner's answer
+/// is final).
+fn grid_leg(
+    s: &Scenario,
+    leg: usize,
+    start: bi_am_rrt::Point,
+    goal: bi_am_rrt::Point,
+    opt: f64,
+    args: &BenchArgs,
+) -> Vec<BenchRow> {
+    type Plan = fn(
+        &bi_am_rrt::map::OccupancyGrid<'_>,
+        bi_am_rrt::Point,
+        bi_am_rrt::Point,
+    ) -> Option<GridPath>;
+    use crate::grid_planners::GridPath;
+    let grid = s.reach_grid();
+    let planners: [(&str, Plan); 2] = [
+        (GRID_ASTAR, crate::grid_planners::astar8),
+        (GRID_THETA_STAR, crate::grid_planners::theta_star),
+    ];
+    let mut rows = Vec::new();
+    for (name, plan) in planners {
+        for seed in 1..=args.seeds.min(GRID_REPEATS) {
+            if args.cold {
+                flush_caches();
+            }
+            let t0 = cpu_time::ThreadTime::now();
+            let path = plan(&grid, start, goal);
+            let us = t0.elapsed().as_secs_f64() * 1e6;
+            let found = path.is_some();
+            rows.push(BenchRow {
+                map: s.name.clone(),
+                leg,
+                planner: name.to_string(),
+                seed,
+                optimal_m: opt,
+                first_us: found.then_some(us),
+                first_ratio: path.map(|p| p.length_m / opt),
+                first_nodes: None,
+                cost_ratio: vec![None; args.budgets.len()],
+                nodes: 0,
+                equal_ratio: None,
+                equal_us: None,
+                expansions_per_s: 0.0,
+                reads_per_expansion: 0.0,
+                full: false,
+            });
+        }
+    }
+    rows
 }
 
 /// What one run measured.
@@ -959,7 +1050,7 @@ pub fn ratios_markdown(
     let mut keys: Vec<(String, String)> = Vec::new();
     for r in rows {
         let k = (r.map.clone(), r.planner.clone());
-        if !r.planner.starts_with("OMPL ") && !keys.contains(&k) {
+        if !is_baseline(&r.planner) && !keys.contains(&k) {
             keys.push(k);
         }
     }
@@ -1010,6 +1101,61 @@ pub fn ratios_markdown(
             s.push_str(&format!(" {} |", cell(c, 4)));
         }
         s.push('\n');
+    }
+    s
+}
+
+/// Each of our planners against the grid planners in the same run, leg by leg (per-leg
+/// medians, then the median of the per-leg ratios and the worst leg): first-solution time
+/// against the grid planner's query time, first path against its path, and the cost at each
+/// budget against its path. Below 1 is ours ahead. Empty without grid rows.
+pub fn grid_markdown(rows: &[BenchRow], budgets: &[f64]) -> String {
+    let mut s = String::from(
+        "Against the grid planners on the same cells, ours / theirs per leg (per-leg medians \
+         over seeds; their time is one query's thread CPU time, the median of up to 5); \
+         median over legs, and the worst leg (leg: ratio); inf where we had no path by then.\n\n\
+         | map | planner | grid planner | first solution / its time | first path / its path |",
+    );
+    for b in budgets {
+        s.push_str(&format!(" cost at {b} s / its path |"));
+    }
+    s.push_str("\n|---|---|---|---:|---:|");
+    for _ in budgets {
+        s.push_str("---:|");
+    }
+    s.push('\n');
+    let cell = |r: Option<(f64, usize, f64)>, digits: usize| match r {
+        Some((m, l, w)) => format!("{m:.digits$} (leg {l}: {w:.digits$})"),
+        None => "-".into(),
+    };
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for r in rows {
+        let k = (r.map.clone(), r.planner.clone());
+        if !is_baseline(&r.planner) && !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (map, planner) in keys {
+        for grid in [GRID_ASTAR, GRID_THETA_STAR] {
+            let theirs = |f: &dyn Fn(&BenchRow) -> Option<f64>| leg_medians(rows, &map, grid, f);
+            let ours = |f: &dyn Fn(&BenchRow) -> Option<f64>| leg_medians(rows, &map, &planner, f);
+            if theirs(&|r| r.first_us).is_empty() {
+                continue;
+            }
+            let first = leg_ratios(&ours(&|r| r.first_us), &theirs(&|r| r.first_us));
+            let path = leg_ratios(&ours(&|r| r.first_ratio), &theirs(&|r| r.first_ratio));
+            s.push_str(&format!(
+                "| {map} | {planner} | {grid} | {} | {} |",
+                cell(first, 2),
+                cell(path, 3)
+            ));
+            for i in 0..budgets.len() {
+                let get = move |r: &BenchRow| r.cost_ratio.get(i).copied().flatten();
+                let c = leg_ratios(&ours(&get), &theirs(&|r| r.first_ratio));
+                s.push_str(&format!(" {} |", cell(c, 3)));
+            }
+            s.push('\n');
+        }
     }
     s
 }

@@ -540,6 +540,17 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
             }
         })
         .collect();
+    // Legs through long narrow corridors, said before the runs (issue 42).
+    for prep in &preps {
+        for cfg in &planners {
+            prep.warn_narrow_legs(*cfg, &|k| {
+                Some(format!(
+                    "within the leg's {} calls",
+                    prep.leg_calls(k, &Default::default())
+                ))
+            });
+        }
+    }
     // Bake what the planners need before timing anything.
     let maps = prepare(&preps, &planners, &pool)?;
     for m in &maps {

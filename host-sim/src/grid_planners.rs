@@ -222,3 +222,67 @@ mod tests {
         assert!(compared > 50);
     }
 }
+
+/// The width of the passage at free cell `(c, r)`, in cells: the shorter of the two free runs
+/// through it, along its row and along its column (a 1-cell corridor's cells: 1; a door's: the
+/// door's width; a room's: at least the room's narrower side). 0 for an occupied cell.
+pub fn passage_cells(grid: &OccupancyGrid<'_>, c: i32, r: i32) -> u32 {
+    if !free(grid, c, r) {
+        return 0;
+    }
+    let run = |dc: i32, dr: i32| {
+        let mut n = 0;
+        while free(grid, c + dc * (n + 1), r + dr * (n + 1)) {
+            n += 1;
+        }
+        n as u32
+    };
+    (1 + run(1, 0) + run(-1, 0)).min(1 + run(0, 1) + run(0, -1))
+}
+
+/// Where a grid path runs ([`passage_cells`] along it, each piece of the path counted at the
+/// cell of its midpoint).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Passages {
+    /// The path's length, in metres.
+    pub length_m: f64,
+    /// The part of it in passages narrower than the width asked about, in metres.
+    pub narrow_m: f64,
+    /// The median passage width along the path (weighted by length), in metres.
+    pub median_width_m: f64,
+}
+
+/// How much of `path` runs through passages narrower than `width_m` ([`Passages`]).
+pub fn passages(grid: &OccupancyGrid<'_>, path: &GridPath, width_m: f64) -> Passages {
+    let cell = f64::from(grid.cell_size());
+    let mut pieces: Vec<(f64, f64)> = path
+        .points
+        .windows(2)
+        .filter_map(|w| {
+            let len = f64::from(w[0].dist(w[1]));
+            let (c, r) = grid.cell_of(w[0].lerp(w[1], 0.5))?;
+            let width = f64::from(passage_cells(grid, i32::from(c), i32::from(r))) * cell;
+            Some((width, len))
+        })
+        .collect();
+    let narrow_m = pieces
+        .iter()
+        .filter(|(w, _)| *w < width_m)
+        .map(|(_, l)| l)
+        .sum();
+    pieces.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let half = pieces.iter().map(|p| p.1).sum::<f64>() / 2.0;
+    let mut acc = 0.0;
+    let median_width_m = pieces
+        .iter()
+        .find(|(_, l)| {
+            acc += l;
+            acc >= half
+        })
+        .map_or(0.0, |p| p.0);
+    Passages {
+        length_m: path.length_m,
+        narrow_m,
+        median_width_m,
+    }
+}

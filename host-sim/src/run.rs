@@ -232,6 +232,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
             args.seed
         )
     };
+    // Legs through long narrow corridors: said before the run, not after it.
+    prep.warn_narrow_legs(cfg, &|k| {
+        goals.contains(&k).then(|| {
+            format!(
+                "within the leg's {} calls",
+                prep.leg_calls(k, &Protocol::default())
+            )
+        })
+    });
     let started = Instant::now();
     // On a terminal, a bar per leg (calls against the leg's cap, with an ETA); elsewhere
     // nothing but the line per goal.

@@ -48,8 +48,9 @@ pub struct Prepared {
     optima: OnceLock<Vec<Option<f64>>>,
     /// Skip the exact optimum (`--no-optimum`): every leg's optimum reads `None`.
     pub no_optimum: bool,
-    /// Each leg's call budget ([`Prepared::leg_calls`]), once computed.
-    leg_calls: OnceLock<Vec<u32>>,
+    /// Each leg's 8-connected grid path over the cells with room, once computed
+    /// ([`Prepared::grid_paths`]).
+    grid_paths: OnceLock<Vec<Option<crate::grid_planners::GridPath>>>,
 }
 
 impl Prepared {
@@ -68,7 +69,7 @@ impl Prepared {
             table,
             optima: OnceLock::new(),
             no_optimum: false,
-            leg_calls: OnceLock::new(),
+            grid_paths: OnceLock::new(),
         }
     }
 
@@ -89,25 +90,66 @@ impl Prepared {
     /// cells with room takes at the protocol's speed when that is more (a 6 km leg through a
     /// maze of 1 m corridors), so that the cap follows the leg, not a fixed distance. The
     /// leg's length is its 8-connected path over the cells with room
-    /// ([`crate::graph::grid_path_length`]), computed once per leg on first use.
+    /// ([`Prepared::grid_paths`]).
     pub fn leg_calls(&self, gi: usize, protocol: &Protocol) -> u32 {
-        let lengths = self.leg_calls.get_or_init(|| {
+        let m = self
+            .grid_paths()
+            .get(gi)
+            .and_then(Option::as_ref)
+            .map_or(0.0, |p| p.length_m);
+        // In whole decimetres, as before the paths were kept.
+        let dm = (m * 10.0).ceil();
+        let speed = f64::from(protocol.speed.max(1e-3));
+        let need = (4.0 * dm / 10.0 / speed).ceil() as u32;
+        protocol.max_calls.max(need)
+    }
+
+    /// Each leg's shortest 8-connected path over the cells with room
+    /// ([`crate::grid_planners::astar8`]; `None` for a leg without one), computed once.
+    pub fn grid_paths(&self) -> &[Option<crate::grid_planners::GridPath>] {
+        self.grid_paths.get_or_init(|| {
             let grid = self.scenario.reach_grid();
             let starts = crate::optimum::leg_starts(&self.scenario);
             starts
                 .iter()
                 .zip(&self.scenario.goals)
-                .map(|(&a, &b)| {
-                    // In decimetres; an unreachable leg gets the protocol's cap.
-                    crate::graph::grid_path_length(&grid, a, b)
-                        .map_or(0, |d| (d * 10.0).ceil() as u32)
-                })
+                .map(|(&a, &b)| crate::grid_planners::astar8(&grid, a, b))
                 .collect()
-        });
-        let dm = lengths.get(gi).copied().unwrap_or(0);
-        let speed = f64::from(protocol.speed.max(1e-3));
-        let need = (4.0 * f64::from(dm) / 10.0 / speed).ceil() as u32;
-        protocol.max_calls.max(need)
+        })
+    }
+
+    /// The legs whose shortest grid path runs mostly (half or more) through passages
+    /// narrower than `e_max / 4`, for at least 20 `e_max` (issue 42), with what their paths
+    /// run through ([`crate::grid_planners::passages`]): sampling trees, ours and OMPL's,
+    /// cross long corridors of a few cells slowly. Measured: on a 129 x 129 maze of 1 m
+    /// corridors (`scripts/gen-maps.py`), leg 1 (2.4 km through corridors one cell wide),
+    /// neither the tuned set with `e_max` 1.2-5 m nor OMPL's RRT-Connect had a path after 10 s
+    /// of CPU, where A* took 0.6 ms. Commands print [`narrow_warning`] for each before they
+    /// run, so a user knows early; the run goes on.
+    pub fn narrow_legs(&self, e_max: f32) -> Vec<(usize, crate::grid_planners::Passages)> {
+        let grid = self.scenario.reach_grid();
+        let width = f64::from(e_max) / 4.0;
+        self.grid_paths()
+            .iter()
+            .enumerate()
+            .filter_map(|(k, p)| {
+                let p = crate::grid_planners::passages(&grid, p.as_ref()?, width);
+                (p.narrow_m >= 0.5 * p.length_m && p.narrow_m >= 20.0 * f64::from(e_max))
+                    .then_some((k, p))
+            })
+            .collect()
+    }
+
+    /// Prints [`narrow_warning`] to stderr for each of [`Prepared::narrow_legs`] with `cfg`'s
+    /// lengths on this scenario; `budget(k)` says what the planner has for leg `k` (`None`:
+    /// the leg is not run).
+    pub fn warn_narrow_legs(&self, cfg: Config, budget: &dyn Fn(usize) -> Option<String>) {
+        let e_max = self.config(cfg).search.e_max;
+        for (k, p) in self.narrow_legs(e_max) {
+            let Some(budget) = budget(k) else { continue };
+            let w = narrow_warning(k, &p, e_max, &budget);
+            eprintln!("warning: {} on {}, {w}", cfg.name(), self.scenario.name);
+        }
     }
 
     /// The grid graph (for the geodesic metric).
@@ -491,4 +533,26 @@ pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<
     })
     .ok()?;
     crate::optimum::Corners::of(&refined.grid()).shortest(a, b)
+}
+
+/// The warning for leg `k` (0-based) of [`Prepared::narrow_legs`] for `e_max`; `budget` says
+/// what the planner has for it ("within the leg's 3000 calls").
+pub fn narrow_warning(
+    k: usize,
+    p: &crate::grid_planners::Passages,
+    e_max: f32,
+    budget: &str,
+) -> String {
+    format!(
+        "leg {}: {:.0} m of its {:.0} m shortest grid path run through passages narrower than \
+         e_max / 4 ({:.2} m; median width {:.2} m): sampling trees, this planner's and OMPL's, \
+         cross long narrow corridors slowly and may not reach this goal {budget}; a grid \
+         planner finds it in milliseconds (`host-sim optimum` runs A* and Theta*; \
+         docs/performance.md, \"Grid planners or this planner\")",
+        k + 1,
+        p.narrow_m,
+        p.length_m,
+        e_max / 4.0,
+        p.median_width_m,
+    )
 }

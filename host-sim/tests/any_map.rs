@@ -146,3 +146,86 @@ fn the_optimum_of_a_one_cell_maze() {
         "{d} vs {centre}"
     );
 }
+
+/// `maze` with every cell blown up to `k x k` cells of `1 / k` m: the same maze in metres,
+/// drawn finer.
+fn finer(s: &Scenario, k: u16) -> Scenario {
+    let g = s.map.grid();
+    let map = OwnedGrid::from_fn(g.cols() * k, g.rows() * k, 1.0 / f32::from(k), |c, r| {
+        g.is_occupied(c / k, r / k)
+    })
+    .unwrap();
+    Scenario { map, ..s.clone() }
+}
+
+/// A leg that runs through long corridors one cell wide is named before the run (issue 42:
+/// on the 129-cell maze neither our planner nor OMPL's RRT-Connect had a path after 10 s),
+/// with its narrow length and median width; the same maze with corridors 8 cells wide (e_max
+/// the same) is not, nor is any leg of the reference, nav2 and benchmark maps of `../shared`.
+#[test]
+fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
+    let tuned = bi_am_rrt::Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
+    let prep = host_sim::sim::Prepared::new(maze(64, 7));
+    let e_max = prep.config(tuned).search.e_max;
+    let narrow = prep.narrow_legs(e_max);
+    // Leg 2 (2 m between the goals) is too short to name.
+    assert_eq!(narrow.iter().map(|n| n.0).collect::<Vec<_>>(), [0]);
+    let p = narrow[0].1;
+    assert!(p.narrow_m > 0.6 * p.length_m, "{p:?}");
+    assert_eq!(p.median_width_m, 1.0);
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "within the leg's 4000 calls");
+    assert!(
+        w.starts_with("leg 1: ") && w.contains("median width 1.00 m"),
+        "{w}"
+    );
+    // A maze of 8 m corridors in 1 m cells (256 m across): wider than e_max / 4.
+    let wide = maze(16, 7);
+    let wide = Scenario {
+        map: {
+            let g = wide.map.grid();
+            OwnedGrid::from_fn(g.cols() * 8, g.rows() * 8, 1.0, |c, r| {
+                g.is_occupied(c / 8, r / 8)
+            })
+            .unwrap()
+        },
+        start: Point::new(12.0, 12.0),
+        goals: vec![Point::new(252.0, 252.0)],
+        ..wide
+    };
+    let prep = host_sim::sim::Prepared::new(wide);
+    let e_max = prep.config(tuned).search.e_max;
+    assert!(
+        e_max < 32.0,
+        "corridors of 8 m stay wider than e_max / 4 ({e_max} m)"
+    );
+    assert!(prep.narrow_legs(e_max).is_empty());
+    // A 33 m maze of 1 m corridors drawn in 0.25 m cells: e_max (1.65 m, from the map's
+    // size) / 4 is below the corridors' 4 cells.
+    let prep = host_sim::sim::Prepared::new(finer(&maze(16, 3), 4));
+    let e_max = prep.config(tuned).search.e_max;
+    assert!(prep.narrow_legs(e_max).is_empty(), "e_max {e_max}");
+    // The maps of ../shared: none named.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps");
+    for file in [
+        "scenarios.toml",
+        "real/scenarios.toml",
+        "external/scenarios.toml",
+    ] {
+        let path = root.join(file);
+        if !path.exists() {
+            println!("skipped: {} is absent", path.display());
+            continue;
+        }
+        for s in host_sim::maps::load_scenarios(&path, None).unwrap() {
+            let prep = host_sim::sim::Prepared::new(s);
+            let e_max = prep.config(tuned).search.e_max;
+            let named = prep.narrow_legs(e_max);
+            println!(
+                "{}: e_max {e_max} m, {} legs named",
+                prep.scenario.name,
+                named.len()
+            );
+            assert!(named.is_empty(), "{}: {named:?}", prep.scenario.name);
+        }
+    }
+}

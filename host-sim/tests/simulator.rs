@@ -847,6 +847,7 @@ fn bench_measures_every_leg_variant_and_seed() {
         clock: host_sim::bench::BenchClock::Virtual,
         cold: false,
         until_first: false,
+        grid: false,
     })
     .unwrap();
     assert_eq!(rows.len(), legs * 2 * 2);
@@ -865,6 +866,57 @@ fn bench_measures_every_leg_variant_and_seed() {
         assert!(dir.path().join(f).exists(), "{f}");
     }
     assert!(host_sim::bench::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
+}
+
+/// `bench` runs the grid planners on every leg by default (issue 42): A* and Theta* rows per
+/// leg, paths no shorter than the exact optimum (Theta*'s no longer than A*'s here: on the
+/// open field it cuts A*'s 45-degree turns), and `grid.md` sets each of our planners against
+/// both.
+#[test]
+fn bench_runs_the_grid_planners_on_every_leg() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = maps::builtin_by_name("open").unwrap();
+    let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
+        scenarios: vec![s.clone()],
+        legs: vec![],
+        variants: host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        seeds: 2,
+        budgets: vec![0.002],
+        nodes: 2048,
+        out: dir.path().to_path_buf(),
+        table: TableOptions::default(),
+        ompl: None,
+        clock: host_sim::bench::BenchClock::Virtual,
+        cold: true,
+        until_first: false,
+        grid: true,
+    })
+    .unwrap();
+    let of = |name: &str| -> Vec<&host_sim::bench::BenchRow> {
+        rows.iter().filter(|r| r.planner == name).collect()
+    };
+    let (astar, theta) = (
+        of(host_sim::bench::GRID_ASTAR),
+        of(host_sim::bench::GRID_THETA_STAR),
+    );
+    assert_eq!(astar.len(), s.goals.len() * 2);
+    assert_eq!(theta.len(), s.goals.len() * 2);
+    for (a, t) in astar.iter().zip(&theta) {
+        assert_eq!((a.leg, a.seed), (t.leg, t.seed));
+        let (ra, rt) = (a.first_ratio.unwrap(), t.first_ratio.unwrap());
+        assert!(a.first_us.unwrap() > 0.0, "{a:?}");
+        assert!(rt >= 1.0 - 1e-4 && ra >= rt - 1e-4, "{a:?} {t:?}");
+    }
+    let grid = std::fs::read_to_string(dir.path().join("grid.md")).unwrap();
+    for g in [
+        host_sim::bench::GRID_ASTAR,
+        host_sim::bench::GRID_THETA_STAR,
+    ] {
+        assert!(
+            grid.contains(&format!("| open | Bi-AM-RRT*(D) tuned | {g} |")),
+            "{grid}"
+        );
+    }
 }
 
 /// `bench --until-first`: each run ends at its first solution (no costs read), so it grows no
@@ -889,6 +941,7 @@ fn bench_until_first_ends_each_run_at_its_first_solution() {
         clock: host_sim::bench::BenchClock::Virtual,
         cold: false,
         until_first,
+        grid: false,
     };
     let full = host_sim::bench::run(&args(false)).unwrap();
     let first = host_sim::bench::run(&args(true)).unwrap();
@@ -924,6 +977,7 @@ fn bench_runs_on_the_steady_clock() {
         clock: host_sim::bench::BenchClock::Steady,
         cold: false,
         until_first: true,
+        grid: false,
     })
     .unwrap();
     let elapsed = wall.elapsed().as_secs_f64() * 1e6;
@@ -975,6 +1029,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
         clock: host_sim::bench::BenchClock::Cpu,
         cold: false,
         until_first: false,
+        grid: false,
     };
     let rows = host_sim::bench::run(&args(3)).unwrap();
     let ratios = std::fs::read_to_string(dir.path().join("out/ratios.md")).unwrap();
