@@ -52,6 +52,12 @@ impl CellEdges {
     /// The edges of `grid` (the rule of [`crate::graph::GridGraph`]), limited to its largest
     /// component (ties to the first in row-major order).
     pub fn build(grid: &OccupancyGrid<'_>) -> Self {
+        Self::build_keeping(grid, None)
+    }
+
+    /// [`CellEdges::build`] on the component of cell `keep` (column, row) when it is free,
+    /// else on the largest.
+    pub fn build_keeping(grid: &OccupancyGrid<'_>, keep: Option<(u16, u16)>) -> Self {
         let (cols, rows) = (grid.cols() as i32, grid.rows() as i32);
         let offs = neighbour_offsets();
         let free = |c: i32, r: i32| {
@@ -104,6 +110,12 @@ impl CellEdges {
             }
             if size > best {
                 (best, best_label) = (size, start as u32);
+            }
+        }
+        if let Some((c, r)) = keep.filter(|&(c, r)| c < grid.cols() && r < grid.rows()) {
+            let l = comp[usize::from(r) * cols as usize + usize::from(c)];
+            if l != u32::MAX {
+                best_label = l;
             }
         }
         for (m, &l) in mask.iter_mut().zip(&comp) {

@@ -116,7 +116,7 @@ pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) ->
     let t0 = Instant::now();
     let baked = if on_cells {
         bar.set_message("cell graph");
-        let graph = GridGraph::build(&g);
+        let graph = GridGraph::build_keeping(&g, table.keep);
         let graph_s = t0.elapsed().as_secs_f64();
         bar.inc(1);
         bar.set_message(format!("diffusion map of {} cells", graph.len()));
@@ -132,7 +132,7 @@ pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) ->
         }
     } else {
         bar.set_message(format!("cell edges of {cells} cells"));
-        let edges = CellEdges::build(&g);
+        let edges = CellEdges::build_keeping(&g, table.keep);
         bar.inc(1);
         bar.set_message("pieces");
         let agg = table.aggregation(&edges, opts.eigenpairs - 1)?;
@@ -406,6 +406,7 @@ pub fn export_flash(
     // map's own (`SPACE`, `ROBOT_RADIUS`).
     let table = &TableOptions {
         map_hash: sc.table_hash(),
+        keep: sc.start_cell(),
         ..*table
     };
     let baked = bake_diffusion(sc.reach_map(), &Options::default(), table)?;

@@ -521,6 +521,10 @@ pub struct TableOptions {
     /// The hash of the map's packed grid, recorded in a pieces table (version 3: the table
     /// is bound to its map); `bake::bake_diffusion` sets it.
     pub map_hash: Option<u32>,
+    /// The cell (column, row) whose connected component of free cells the table covers; the
+    /// largest component when `None` or when the cell is occupied. A scenario's bake gives
+    /// its start (issue 42: a start outside the largest component had no coordinates).
+    pub keep: Option<(u16, u16)>,
 }
 
 /// What the diffusion map is computed on (`bake::Basis`).
@@ -553,6 +557,7 @@ impl Default for TableOptions {
             max_memory: DEFAULT_MAX_MEMORY,
             basis: BasisChoice::Auto,
             map_hash: None,
+            keep: None,
         }
     }
 }

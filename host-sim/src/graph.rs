@@ -92,6 +92,12 @@ pub struct GridGraph {
 impl GridGraph {
     /// Builds the graph of `grid`.
     pub fn build(grid: &OccupancyGrid<'_>) -> Self {
+        Self::build_keeping(grid, None)
+    }
+
+    /// [`GridGraph::build`] on the component of cell `keep` (column, row) when it is free,
+    /// else on the largest.
+    pub fn build_keeping(grid: &OccupancyGrid<'_>, keep: Option<(u16, u16)>) -> Self {
         let (cols, rows) = (grid.cols() as i32, grid.rows() as i32);
         let free = |c: i32, r: i32| {
             c >= 0 && r >= 0 && c < cols && r < rows && !grid.is_occupied(c as u16, r as u16)
@@ -119,10 +125,20 @@ impl GridGraph {
         for l in comp.iter().flatten() {
             *size.entry(*l).or_default() += 1;
         }
-        let (best_label, best_size) = size
+        let (largest_label, largest_size) = size
             .into_iter()
             .max_by_key(|&(l, n)| (n, std::cmp::Reverse(l)))
             .unwrap_or((u32::MAX, 0));
+        let kept = keep.and_then(|(c, r)| {
+            let i = usize::from(r) * cols as usize + usize::from(c);
+            (c < grid.cols() && r < grid.rows())
+                .then(|| comp[i])
+                .flatten()
+        });
+        let best_label = kept.unwrap_or(largest_label);
+        let best_size = kept.map_or(largest_size, |l| {
+            comp.iter().filter(|x| **x == Some(l)).count()
+        });
         let comp: Vec<u32> = comp.into_iter().map(|l| l.unwrap_or(u32::MAX)).collect();
         let mut node_of_cell = vec![u32::MAX; n_cells];
         let mut cell_of_node = Vec::with_capacity(best_size);

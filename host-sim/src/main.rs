@@ -621,6 +621,7 @@ impl TableArgs {
             max_memory: self.max_memory << 20,
             basis: self.basis,
             map_hash: None,
+            keep: None,
         }
     }
 }

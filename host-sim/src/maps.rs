@@ -671,6 +671,12 @@ impl Scenario {
         self.reach.as_ref().unwrap_or(&self.map)
     }
 
+    /// The cell (column, row) of the start: the component a diffusion table baked for this
+    /// scenario covers (`TableOptions::keep`).
+    pub fn start_cell(&self) -> Option<(u16, u16)> {
+        self.reach_grid().cell_of(self.start)
+    }
+
     /// [`Scenario::reach_map`]'s core view.
     pub fn reach_grid(&self) -> OccupancyGrid<'_> {
         self.reach_map().grid()

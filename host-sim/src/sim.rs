@@ -180,6 +180,7 @@ impl Prepared {
                 // For a robot body: on where its disc can go, recording the map and radius.
                 let table = TableOptions {
                     map_hash: self.scenario.table_hash(),
+                    keep: self.scenario.start_cell(),
                     ..self.table
                 };
                 let r = bake_diffusion(self.scenario.reach_map(), &Options::default(), &table)
