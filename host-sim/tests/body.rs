@@ -181,11 +181,12 @@ fn door_scenes_run_with_a_body() {
 }
 
 /// Issue 41's repro: the 512 x 512 MovingAI maze at 0.5 m counted a collision on goal 3 with
-/// seed 1 (`run --all-goals --clock virtual --seed 1 --t-exp-ms 5`). Seeds 1-10, every goal:
-/// reached, no collision (the protocol's exact check).
+/// seed 1 (`run --all-goals --clock virtual --seed 1 --t-exp-ms 5`). Seeds 1-4 (`MAZE512_SEEDS`
+/// sets how many: issue 41's note measured 10), every goal: reached, no collision (the
+/// protocol's exact check).
 #[test]
-#[ignore = "long: 30 legs of the 512 x 512 maze, about 4 minutes on 2 cores (CI runs it)"]
-fn regression_maze512_no_collisions_seeds_1_to_10() {
+#[ignore = "long: 12 legs of the 512 x 512 maze, about 1.5 minutes on 2 cores (CI runs it)"]
+fn regression_maze512_no_collisions() {
     use rayon::prelude::*;
     let file =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps/external/scenarios.toml");
@@ -201,7 +202,11 @@ fn regression_maze512_no_collisions_seeds_1_to_10() {
     let mut cfg = host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap()[0].cfg;
     cfg.budget.t_exp = std::time::Duration::from_millis(5);
     let goals: Vec<usize> = (0..prep.scenario.goals.len()).collect();
-    let bad: Vec<String> = (1..=10u64)
+    let seeds: u64 = std::env::var("MAZE512_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4);
+    let bad: Vec<String> = (1..=seeds)
         .into_par_iter()
         .flat_map_iter(|seed| {
             let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
