@@ -1035,25 +1035,13 @@ pub fn ratios_markdown(
          planner | first solution / RRT-Connect | first path / (RRT-Connect + simplify) | \
          path at equal time / (RRT-Connect + simplify) | read after (us) |"
     );
-    for b in budgets {
-        s.push_str(&format!(" cost at {b} s / Informed RRT* |"));
-    }
-    s.push_str("\n|---|---|---:|---:|---:|---:|");
-    for _ in budgets {
-        s.push_str("---:|");
-    }
-    s.push('\n');
-    let cell = |r: Option<(f64, usize, f64)>, digits: usize| match r {
-        Some((m, l, w)) => format!("{m:.digits$} (leg {l}: {w:.digits$})"),
-        None => "-".into(),
-    };
-    let mut keys: Vec<(String, String)> = Vec::new();
-    for r in rows {
-        let k = (r.map.clone(), r.planner.clone());
-        if !is_baseline(&r.planner) && !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
+    budget_columns(
+        &mut s,
+        budgets,
+        "Informed RRT*",
+        "|---|---|---:|---:|---:|---:|",
+    );
+    let keys = our_planners(rows);
     for (map, planner) in keys {
         let ours = |f: &dyn Fn(&BenchRow) -> Option<f64>| leg_medians(rows, &map, &planner, f);
         let theirs =
@@ -1091,18 +1079,52 @@ pub fn ratios_markdown(
         let late = median(&mut late).map_or("-".into(), |v| format!("{v:.0}"));
         s.push_str(&format!(
             "| {map} | {planner} | {} | {} | {} | {late} |",
-            cell(first, 2),
-            cell(path, 3),
-            cell(equal, 3)
+            ratio_cell(first, 2),
+            ratio_cell(path, 3),
+            ratio_cell(equal, 3)
         ));
         for i in 0..budgets.len() {
             let get = move |r: &BenchRow| r.cost_ratio.get(i).copied().flatten();
             let c = leg_ratios(&ours(&get), &theirs(OMPL_INFORMED_RRT_STAR, &get));
-            s.push_str(&format!(" {} |", cell(c, 4)));
+            s.push_str(&format!(" {} |", ratio_cell(c, 4)));
         }
         s.push('\n');
     }
     s
+}
+
+/// The (map, planner) pairs of our planners' rows, in the order they first appear.
+fn our_planners(rows: &[BenchRow]) -> Vec<(String, String)> {
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for r in rows {
+        let k = (r.map.clone(), r.planner.clone());
+        if !is_baseline(&r.planner) && !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys
+}
+
+/// Ends a table's header: a "cost at B s / `against`" column per budget, then the rule line
+/// (`rule` for the columns before them).
+fn budget_columns(s: &mut String, budgets: &[f64], against: &str, rule: &str) {
+    for b in budgets {
+        s.push_str(&format!(" cost at {b} s / {against} |"));
+    }
+    s.push('\n');
+    s.push_str(rule);
+    for _ in budgets {
+        s.push_str("---:|");
+    }
+    s.push('\n');
+}
+
+/// A table cell of [`leg_ratios`]: the median and the worst leg, or `-`.
+fn ratio_cell(r: Option<(f64, usize, f64)>, digits: usize) -> String {
+    match r {
+        Some((m, l, w)) => format!("{m:.digits$} (leg {l}: {w:.digits$})"),
+        None => "-".into(),
+    }
 }
 
 /// Each of our planners against the grid planners in the same run, leg by leg (per-leg
@@ -1116,25 +1138,8 @@ pub fn grid_markdown(rows: &[BenchRow], budgets: &[f64]) -> String {
          median over legs, and the worst leg (leg: ratio); inf where we had no path by then.\n\n\
          | map | planner | grid planner | first solution / its time | first path / its path |",
     );
-    for b in budgets {
-        s.push_str(&format!(" cost at {b} s / its path |"));
-    }
-    s.push_str("\n|---|---|---|---:|---:|");
-    for _ in budgets {
-        s.push_str("---:|");
-    }
-    s.push('\n');
-    let cell = |r: Option<(f64, usize, f64)>, digits: usize| match r {
-        Some((m, l, w)) => format!("{m:.digits$} (leg {l}: {w:.digits$})"),
-        None => "-".into(),
-    };
-    let mut keys: Vec<(String, String)> = Vec::new();
-    for r in rows {
-        let k = (r.map.clone(), r.planner.clone());
-        if !is_baseline(&r.planner) && !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
+    budget_columns(&mut s, budgets, "its path", "|---|---|---|---:|---:|");
+    let keys = our_planners(rows);
     for (map, planner) in keys {
         for grid in [GRID_ASTAR, GRID_THETA_STAR] {
             let theirs = |f: &dyn Fn(&BenchRow) -> Option<f64>| leg_medians(rows, &map, grid, f);
@@ -1146,13 +1151,13 @@ pub fn grid_markdown(rows: &[BenchRow], budgets: &[f64]) -> String {
             let path = leg_ratios(&ours(&|r| r.first_ratio), &theirs(&|r| r.first_ratio));
             s.push_str(&format!(
                 "| {map} | {planner} | {grid} | {} | {} |",
-                cell(first, 2),
-                cell(path, 3)
+                ratio_cell(first, 2),
+                ratio_cell(path, 3)
             ));
             for i in 0..budgets.len() {
                 let get = move |r: &BenchRow| r.cost_ratio.get(i).copied().flatten();
                 let c = leg_ratios(&ours(&get), &theirs(&|r| r.first_ratio));
-                s.push_str(&format!(" {} |", cell(c, 3)));
+                s.push_str(&format!(" {} |", ratio_cell(c, 3)));
             }
             s.push('\n');
         }

@@ -43,25 +43,16 @@ fn maze(n: usize, seed: u64) -> Scenario {
         open[(y + ny + 1) * w + x + nx + 1] = true;
         stack.push((nx, ny));
     }
-    let map = OwnedGrid::from_fn(w as u16, w as u16, 1.0, |c, r| {
-        !open[usize::from(r) * w + usize::from(c)]
-    })
-    .unwrap();
     let far = w as f32 - 1.5;
-    Scenario {
-        name: format!("maze{w}"),
-        map,
-        source: "test".into(),
-        start: Point::new(1.5, 1.5),
-        goals: vec![Point::new(far, far), Point::new(far, far - 2.0)],
-        sigma: 30.0,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-        clearance: None,
-    }
+    scenario(
+        &format!("maze{w}"),
+        w as u16,
+        w as u16,
+        1.0,
+        |c, r| !open[usize::from(r) * w + usize::from(c)],
+        (1.5, 1.5),
+        &[(far, far), (far, far - 2.0)],
+    )
 }
 
 /// The call budget follows the leg: a leg through a maze longer than 3,000 calls at 0.7 m a
