@@ -66,8 +66,8 @@ impl fmt::Display for Metres {
 
 /// Bi-AM-RRT*(E) drives the agent across the built-in 40 m field (map in flash) under the
 /// benchmark protocol, in calls of 5 ms on a virtual clock of 12 ns per work unit (until issue
-/// 42, calls of 20 ms: 130 M work units where 5 ms take 48 M, and the soft-float QEMU runs of
-/// CI took 2.5 minutes each). Not inlined (nor is the
+/// 42, calls of 20 ms: 130 M work units where 5 ms take 48 M, and CI's soft-float QEMU runs
+/// took 2.5 minutes on the RISC-V build, 5 on the Cortex-M0+ one). Not inlined (nor is the
 /// office mission): its planner's stack frame is gone before the next mission starts
 /// (inlined, the compiler may keep both missions' frames live at once: 1.8 KB more stack
 /// measured on the office sequence).
