@@ -548,7 +548,7 @@ const GRID_REPEATS: u64 = 5;
 
 /// A* on the 8-connected grid and Theta* on one leg ([`crate::grid_planners`]: the cells
 /// with room for the robot's body, as OMPL's and ours), `min(seeds, 5)` queries each, cold
-/// like ours with `--cold`: one row per query, its thread CPU time as the first-solution time
+/// as ours unless `--warm`: one row per query, its thread CPU time as the first-solution time
 /// and its path / optimum as the first path (no costs at budgets: a grid planner's answer
 /// is final).
 fn grid_leg(
