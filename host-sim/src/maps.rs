@@ -429,21 +429,19 @@ pub fn scenarios_from_str(
             ),
             None => Point::new(p[0], p[1]),
         };
+        let sigma = e
+            .sigma_m
+            .unwrap_or(PAPER_SIGMA_M * bi_am_rrt::config::length_scale(wm.max(hm)));
         let sc = Scenario {
-            name,
-            map,
-            source: e.file.display().to_string(),
-            start: pt(e.start),
-            goals: e.goals.into_iter().map(pt).collect(),
-            sigma: e
-                .sigma_m
-                .unwrap_or(PAPER_SIGMA_M * bi_am_rrt::config::length_scale(wm.max(hm))),
             ros_origin,
-            paper_lengths: false,
-            robot_radius: 0.0,
-            space: None,
-            reach: None,
-            clearance: None,
+            ..Scenario::new(
+                name,
+                map,
+                e.file.display().to_string(),
+                pt(e.start),
+                e.goals.into_iter().map(pt).collect(),
+                sigma,
+            )
         };
         let sc = sc.with_robot_radius(e.robot_radius_m.unwrap_or(0.0))?;
         let sc = match e.clearance_margin_m {
@@ -456,6 +454,33 @@ pub fn scenarios_from_str(
 }
 
 impl Scenario {
+    /// A scenario on `map` in the planner's frame (no ROS origin), for a point robot, with
+    /// the lengths that follow the map and no clearance preference: what the loaders, the
+    /// built-in maps and the tests start from.
+    pub fn new(
+        name: impl Into<String>,
+        map: OwnedGrid,
+        source: impl Into<String>,
+        start: Point,
+        goals: Vec<Point>,
+        sigma: f32,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            map,
+            source: source.into(),
+            start,
+            goals,
+            sigma,
+            ros_origin: None,
+            paper_lengths: false,
+            robot_radius: 0.0,
+            space: None,
+            reach: None,
+            clearance: None,
+        }
+    }
+
     /// A position of the planner's frame (metres from the top-left corner, y down) in the
     /// frame the scenario was written in: a ROS map's frame (y up from its origin) or the
     /// former.
@@ -776,20 +801,14 @@ pub fn builtin_scenarios() -> Vec<Scenario> {
 
 /// One built-in scenario.
 pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
-    Scenario {
-        name: s.name.to_string(),
-        map: OwnedGrid::from_grid(&s.grid),
-        source: format!("builtin:{}", s.name),
-        start: s.start,
-        goals: s.goals.to_vec(),
-        sigma: s.sigma,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-        clearance: None,
-    }
+    Scenario::new(
+        s.name,
+        OwnedGrid::from_grid(&s.grid),
+        format!("builtin:{}", s.name),
+        s.start,
+        s.goals.to_vec(),
+        s.sigma,
+    )
 }
 
 /// The built-in scenario of this name.

@@ -231,21 +231,14 @@ fn scenario(
     start: (f32, f32),
     goals: &[(f32, f32)],
 ) -> Scenario {
-    let map = OwnedGrid::from_fn(cols, rows, cell, occupied).unwrap();
-    Scenario {
-        name: name.into(),
-        map,
-        source: "test".into(),
-        start: Point::new(start.0, start.1),
-        goals: goals.iter().map(|&(x, y)| Point::new(x, y)).collect(),
-        sigma: 30.0,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-        clearance: None,
-    }
+    Scenario::new(
+        name,
+        OwnedGrid::from_fn(cols, rows, cell, occupied).unwrap(),
+        "test",
+        Point::new(start.0, start.1),
+        goals.iter().map(|&(x, y)| Point::new(x, y)).collect(),
+        30.0,
+    )
 }
 
 /// A seeded hash of a cell: uniform in [0, 1).

@@ -18,20 +18,14 @@ fn hall(door: f32) -> Scenario {
         (c == 40 || c == 41) && !(18..18 + cells).contains(&r)
     })
     .unwrap();
-    Scenario {
-        name: "hall".into(),
+    Scenario::new(
+        "hall",
         map,
-        source: "test".into(),
-        start: Point::new(3.0, 5.0),
-        goals: vec![Point::new(17.0, 5.0), Point::new(4.0, 8.0)],
-        sigma: 6.0,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-        clearance: None,
-    }
+        "test",
+        Point::new(3.0, 5.0),
+        vec![Point::new(17.0, 5.0), Point::new(4.0, 8.0)],
+        6.0,
+    )
 }
 
 #[test]

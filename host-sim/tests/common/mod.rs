@@ -14,18 +14,12 @@ pub fn two_doors() -> Scenario {
             || (c == 20 && !(5..10).contains(&r) && !(20..25).contains(&r))
     })
     .unwrap();
-    Scenario {
-        name: "two-doors".into(),
+    Scenario::new(
+        "two-doors",
         map,
-        source: "test".into(),
-        start: Point::new(5.5, 7.5),
-        goals: vec![Point::new(34.5, 7.5)],
-        sigma: 18.0,
-        ros_origin: None,
-        paper_lengths: false,
-        robot_radius: 0.0,
-        space: None,
-        reach: None,
-        clearance: None,
-    }
+        "test",
+        Point::new(5.5, 7.5),
+        vec![Point::new(34.5, 7.5)],
+        18.0,
+    )
 }
