@@ -2,12 +2,18 @@
 """Maps of the kinds users bring (issue 42), generated with fixed seeds into a folder of PNGs
 and a scenario file (nothing is committed):
 
-    scripts/gen-maps.py OUT_DIR
+    scripts/gen-maps.py OUT_DIR [--big]
     target/release/host-sim optimum --scenarios OUT_DIR/scenarios.toml --scenario maze129
+
+(--big takes about two minutes: the mazes are carved in plain Python.)
 
 - maze129, maze511: perfect mazes of 1-cell corridors (depth-first carving), 1 m cells,
   start and goals in the corners;
-- city1024: 1,024 x 1,024 cells of 1 m with 900 rectangular blocks of 8-40 cells a side.
+- city1024: 1,024 x 1,024 cells of 1 m with 900 rectangular blocks of 8-40 cells a side;
+- with --big (issue 42's "any map up to 4096 x 4096 cells"): maze2047 and maze4095, mazes of
+  1-cell corridors at 1 m; rooms4096, a building drawn like a SLAM map at 0.05 m (204.8 m a
+  side): rooms split at random with 0.15 m walls and 0.9 m doors, furniture, and specks of
+  sensor noise (one cell in 2,000).
 
 The figures of README's "Big maps" paragraph and of host-sim/src/optimum.rs come from these.
 """
@@ -61,6 +67,57 @@ def maze(n, seed):
     return g
 
 
+def rooms(w, seed):
+    """A building at 0.05 m: walls of 3 cells split the floor into rooms (binary splits down
+    to 4-20 m), each wall with one or two 18-cell doors; furniture; specks of noise."""
+    rng = random.Random(seed)
+    g = [bytearray(w) for _ in range(w)]
+
+    def fill(x0, y0, x1, y1, v=1):
+        for y in range(max(y0, 0), min(y1, w)):
+            g[y][max(x0, 0) : min(x1, w)] = bytes([v]) * (min(x1, w) - max(x0, 0))
+
+    fill(0, 0, w, 4)
+    fill(0, w - 4, w, w)
+    fill(0, 0, 4, w)
+    fill(w - 4, 0, w, w)
+    rooms_ = []
+
+    def split(x0, y0, x1, y1):
+        big = max(x1 - x0, y1 - y0)
+        if big < 170 or (big < 400 and rng.random() < 0.4):
+            rooms_.append((x0, y0, x1, y1))
+            return
+        vertical = (x1 - x0) >= (y1 - y0)
+        if vertical:
+            x = rng.randint(x0 + 80, x1 - 83)
+            fill(x, y0, x + 3, y1)
+            for _ in range(rng.randint(1, 2)):
+                d = rng.randint(y0 + 4, max(y0 + 4, y1 - 22))
+                fill(x, d, x + 3, d + 18, 0)
+            split(x0, y0, x, y1)
+            split(x + 3, y0, x1, y1)
+        else:
+            y = rng.randint(y0 + 80, y1 - 83)
+            fill(x0, y, x1, y + 3)
+            for _ in range(rng.randint(1, 2)):
+                d = rng.randint(x0 + 4, max(x0 + 4, x1 - 22))
+                fill(d, y, d + 18, y + 3, 0)
+            split(x0, y0, x1, y)
+            split(x0, y + 3, x1, y1)
+
+    split(4, 4, w - 4, w - 4)
+    for x0, y0, x1, y1 in rooms_:
+        for _ in range(rng.randint(0, 4)):
+            bw, bh = rng.randint(10, 40), rng.randint(10, 40)
+            if x1 - x0 > bw + 40 and y1 - y0 > bh + 40:
+                x, y = rng.randint(x0 + 20, x1 - bw - 20), rng.randint(y0 + 20, y1 - bh - 20)
+                fill(x, y, x + bw, y + bh)
+    for _ in range(w * w // 2000):
+        g[rng.randrange(w)][rng.randrange(w)] = 1
+    return g
+
+
 def city(w, blocks, seed):
     rng = random.Random(seed)
     g = [[0] * w for _ in range(w)]
@@ -76,12 +133,17 @@ def city(w, blocks, seed):
 
 
 def main():
-    if len(sys.argv) != 2:
+    args = [a for a in sys.argv[1:] if a != "--big"]
+    if len(args) != 1:
         sys.exit(__doc__)
-    out = pathlib.Path(sys.argv[1])
+    big = "--big" in sys.argv[1:]
+    out = pathlib.Path(args[0])
     out.mkdir(parents=True, exist_ok=True)
     scenarios = []
-    for name, n, seed in [("maze129", 64, 3), ("maze511", 255, 5)]:
+    mazes = [("maze129", 64, 3), ("maze511", 255, 5)]
+    if big:
+        mazes += [("maze2047", 1023, 7), ("maze4095", 2047, 9)]
+    for name, n, seed in mazes:
         g = maze(n, seed)
         png(out / f"{name}.png", g)
         far = len(g) - 1.5
@@ -89,11 +151,21 @@ def main():
     g = city(1024, 900, 11)
     png(out / "city1024.png", g)
     scenarios.append(("city1024", [2.5, 2.5], [[1021.5, 1021.5], [2.5, 1021.5], [1021.5, 2.5]]))
+    if big:
+        w = 4096
+        g = rooms(w, 13)
+        ends = [(10, 10), (w - 11, w - 11), (10, w - 11), (w - 11, 10)]
+        for x, y in ends:
+            for yy in range(y - 3, y + 4):
+                g[yy][x - 3 : x + 4] = bytes(7)
+        png(out / "rooms4096.png", g)
+        m = [[round((x + 0.5) * 0.05, 3), round((y + 0.5) * 0.05, 3)] for x, y in ends]
+        scenarios.append(("rooms4096", m[0], m[1:], 0.05))
     with open(out / "scenarios.toml", "w") as f:
-        for name, start, goals in scenarios:
+        for name, start, goals, *cell in scenarios:
             f.write(
-                f'[{name}]\nfile = "{name}.png"\nresolution_m = 1.0\nstart = {start}\n'
-                f"goals = {goals}\n\n"
+                f'[{name}]\nfile = "{name}.png"\nresolution_m = {(cell or [1.0])[0]}\n'
+                f"start = {start}\ngoals = {goals}\n\n"
             )
     print(f"wrote {len(scenarios)} scenarios to {out / 'scenarios.toml'}")
 
