@@ -135,7 +135,20 @@ pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) ->
         let edges = CellEdges::build_keeping(&g, table.keep);
         bar.inc(1);
         bar.set_message("pieces");
-        let agg = table.aggregation(&edges, opts.eigenpairs - 1)?;
+        let (fitted, agg) = table.fitted_aggregation(&edges, opts.eigenpairs - 1)?;
+        if fitted.max_bytes != table.max_bytes {
+            bar.suspend(|| {
+                eprintln!(
+                    "note: the pieces of this {} x {} map need more than the {}-byte default \
+                     table: budget raised to {} bytes (give --max-bytes to fix it)",
+                    grid.width,
+                    grid.height,
+                    table.budget(cells),
+                    fitted.max_bytes
+                )
+            });
+        }
+        let table = &fitted;
         let graph_s = t0.elapsed().as_secs_f64();
         bar.inc(1);
         bar.set_message(format!(

@@ -803,6 +803,34 @@ impl TableOptions {
         )
     }
 
+    /// [`Self::aggregation`], and with the automatic budget (`max_bytes` 0, every simulator
+    /// command's) a map whose pieces do not fit it gets a larger one, doubled up to 64 times
+    /// until they do (the host keeps the table in memory; an export for a chip gives its
+    /// flash as the budget): the options used (`max_bytes` set when raised) and the pieces.
+    pub fn fitted_aggregation(
+        &self,
+        edges: &CellEdges,
+        dims: usize,
+    ) -> Result<(Self, Aggregation)> {
+        let first = self.aggregation(edges, dims);
+        if first.is_ok() || self.max_bytes != 0 {
+            return first.map(|a| (*self, a));
+        }
+        let auto = self.budget(edges.cols as usize * edges.rows as usize);
+        let mut last = first;
+        for factor in [2, 4, 8, 16, 32, 64] {
+            let raised = Self {
+                max_bytes: auto * factor,
+                ..*self
+            };
+            match raised.aggregation(edges, dims) {
+                Ok(a) => return Ok((raised, a)),
+                Err(e) => last = Err(e),
+            }
+        }
+        last.map(|a| (*self, a))
+    }
+
     /// The coarsening factor used for a graph of `cols x rows` cells with `dims` coordinates
     /// in the uniform layout.
     pub fn factor(&self, cols: u32, rows: u32, dims: usize) -> u16 {
@@ -1024,6 +1052,44 @@ fn representative(graph: &GridGraph, tc: u32, tr: u32, c: u32) -> Option<u32> {
 mod tests {
     use super::*;
     use crate::maps::OwnedGrid;
+
+    /// Issue 42: a 4,096-cell building at 0.05 m was refused by `run` ("no table fits
+    /// 8486912 bytes: raise --max-bytes", a flag `run` does not have). A map of 2,048 x 2,048
+    /// cells whose 1-cell corridors join in pairs only every other block row (in alternate
+    /// pairs) makes more pieces than the default budget holds at any block side: the
+    /// automatic budget is raised until they fit; a budget the user gave is kept, and refused
+    /// as before.
+    #[test]
+    fn regression_a_map_whose_pieces_outgrow_the_default_table_gets_a_larger_one() {
+        let side = 2048u16;
+        let g = OwnedGrid::from_fn(side, side, 0.05, |c, r| {
+            let (c, r) = (u32::from(c), u32::from(r));
+            // Walls at even columns; a wall at 4k opens at row 63 of every 256, one at
+            // 4k + 2 at row 191.
+            c % 2 == 0 && !((c % 4 == 0 && r % 256 == 63) || (c % 4 == 2 && r % 256 == 191))
+        })
+        .unwrap();
+        let edges = crate::aggregate::CellEdges::build(&g.grid());
+        let dims = Options::default().eigenpairs - 1;
+        let auto = TableOptions::default();
+        assert!(
+            auto.aggregation(&edges, dims).is_err(),
+            "the default budget fits: no test"
+        );
+        let (fitted, agg) = auto.fitted_aggregation(&edges, dims).unwrap();
+        let cells = usize::from(side) * usize::from(side);
+        assert!(
+            fitted.max_bytes > auto.budget(cells),
+            "{}",
+            fitted.max_bytes
+        );
+        assert!(agg.count > 0);
+        let given = TableOptions {
+            max_bytes: auto.budget(cells),
+            ..auto
+        };
+        assert!(given.fitted_aggregation(&edges, dims).is_err());
+    }
 
     /// The eigenvalues against faer's dense solver on a small map.
     #[test]
