@@ -10,6 +10,8 @@ and a scenario file (nothing is committed):
 - maze129, maze511: perfect mazes of 1-cell corridors (depth-first carving), 1 m cells,
   start and goals in the corners;
 - city1024: 1,024 x 1,024 cells of 1 m with 900 rectangular blocks of 8-40 cells a side;
+- house384, house500: small buildings drawn like SLAM maps at 0.05 m (as rooms4096 below,
+  19.2 and 25 m a side), the size of the small SLAM maps of issue 42;
 - with --big (issue 42's "any map up to 4096 x 4096 cells"): maze2047 and maze4095, mazes of
   1-cell corridors at 1 m; rooms4096, a building drawn like a SLAM map at 0.05 m (204.8 m a
   side): rooms split at random with 0.15 m walls and 0.9 m doors, furniture, and specks of
@@ -151,16 +153,18 @@ def main():
     g = city(1024, 900, 11)
     png(out / "city1024.png", g)
     scenarios.append(("city1024", [2.5, 2.5], [[1021.5, 1021.5], [2.5, 1021.5], [1021.5, 2.5]]))
+    buildings = [("house384", 384, 17), ("house500", 500, 19)]
     if big:
-        w = 4096
-        g = rooms(w, 13)
+        buildings.append(("rooms4096", 4096, 13))
+    for name, w, seed in buildings:
+        g = rooms(w, seed)
         ends = [(10, 10), (w - 11, w - 11), (10, w - 11), (w - 11, 10)]
         for x, y in ends:
             for yy in range(y - 3, y + 4):
                 g[yy][x - 3 : x + 4] = bytes(7)
-        png(out / "rooms4096.png", g)
+        png(out / f"{name}.png", g)
         m = [[round((x + 0.5) * 0.05, 3), round((y + 0.5) * 0.05, 3)] for x, y in ends]
-        scenarios.append(("rooms4096", m[0], m[1:], 0.05))
+        scenarios.append((name, m[0], m[1:], 0.05))
     with open(out / "scenarios.toml", "w") as f:
         for name, start, goals, *cell in scenarios:
             f.write(

@@ -32,8 +32,9 @@
 //! of 900 blocks 0.04-0.07 s, mazes of 1-cell corridors of 129, 511, 2,047 and 4,095 cells
 //! 0.004 s, 0.03-0.05 s (25-40 s before), 0.5-0.9 s and 1.9-3.1 s (2.9 million corners, legs
 //! of 216-690 km), a 4,096-cell building drawn like a SLAM map at 0.05 m (38,456 corners)
-//! 1.0-1.8 s (26-110 s before; the lattice's Dijkstra over 16.8 million points is about
-//! 0.7-0.9 s of it): `scripts/gen-maps.py --big`.
+//! 0.9-2.6 s for legs across it (26-110 s before; the lattice's Dijkstra over 16.8 million
+//! points is about 0.7-0.9 s of it, the machine's noise the spread), 0.17-0.47 s for legs of
+//! 19-83 m in it (the Dijkstra stops past the start): `scripts/gen-maps.py --big`.
 //!
 //! Checked against the exact optima of the 24 reference legs in
 //! `../shared/anchors/reference-figures.md` (test `optima_match_the_reference_figures`).
@@ -347,7 +348,7 @@ impl Corners {
         if self.sees(s, g) {
             return Some(dist(s, g) * self.cell);
         }
-        let to_goal = self.lattice_to(g);
+        let to_goal = self.lattice_to(g, s);
         let w = self.cols + 1;
         // The heuristic (`lattice_to`): the straight line or the lattice's distance over its
         // stretch less the goal cell's half diagonal, whichever is longer; infinite where the
@@ -648,7 +649,7 @@ impl Corners {
     /// 1/`LATTICE_UNIT` of a cell; `u32::MAX`: not reached) over the lattice: steps along a
     /// grid line beside a free cell (or the map's edge) and across a free cell's diagonal,
     /// the diagonal rounded down (Dijkstra with Dial's buckets, one per distance modulo the
-    /// longest step).
+    /// longest step), stopped some way past the start `s` (below).
     ///
     /// The heuristic of [`Self::shortest`]: a free segment between two lattice points has a
     /// lattice path over the cells it crosses (a Bresenham staircase) at most
@@ -658,44 +659,71 @@ impl Corners {
     /// `LATTICE_STRETCH` (L + sqrt 2): this distance over the stretch, less sqrt 2, never
     /// exceeds L, and falls by no more than a segment's length along it (consistent: A*
     /// stays exact).
-    fn lattice_to(&self, g: (f64, f64)) -> Vec<u32> {
+    fn lattice_to(&self, g: (f64, f64), s: (f64, f64)) -> Vec<u32> {
         let w = self.cols + 1;
         let at = |i: i64, j: i64| (j * w + i) as usize;
         let mut dist = vec![u32::MAX; (w * (self.rows + 1)) as usize];
         let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); DIAG_DOWN as usize + 1];
         let nb = buckets.len();
         let mut queued = 0usize;
-        let (gi, gj) = (floor_any(g.0), floor_any(g.1));
-        for c in gi - 1..=gi {
-            for r in gj - 1..=gj {
-                let around = (c as f64) <= g.0
-                    && g.0 <= (c + 1) as f64
-                    && (r as f64) <= g.1
-                    && g.1 <= (r + 1) as f64;
-                let inside = c >= 0 && r >= 0 && c < self.cols && r < self.rows;
-                if around && inside && !self.occ(c, r) {
-                    for p in [at(c, r), at(c + 1, r), at(c, r + 1), at(c + 1, r + 1)] {
-                        if dist[p] != 0 {
-                            dist[p] = 0;
-                            buckets[0].push(p as u32);
-                            queued += 1;
-                        }
+        // The corners of the free cells whose closed square holds a point.
+        let cell_corners = |p: (f64, f64)| {
+            let (pi, pj) = (floor_any(p.0), floor_any(p.1));
+            let mut out = Vec::new();
+            for c in pi - 1..=pi {
+                for r in pj - 1..=pj {
+                    let around = (c as f64) <= p.0
+                        && p.0 <= (c + 1) as f64
+                        && (r as f64) <= p.1
+                        && p.1 <= (r + 1) as f64;
+                    let inside = c >= 0 && r >= 0 && c < self.cols && r < self.rows;
+                    if around && inside && !self.occ(c, r) {
+                        out.extend([at(c, r), at(c + 1, r), at(c, r + 1), at(c + 1, r + 1)]);
                     }
                 }
             }
+            out
+        };
+        for p in cell_corners(g) {
+            if dist[p] != 0 {
+                dist[p] = 0;
+                buckets[0].push(p as u32);
+                queued += 1;
+            }
         }
+        // Once the start's corners are settled (the largest at D), the search goes on to
+        // D times the stretch, plus four steps, and stops: a point beyond that is given that
+        // figure (no more than its distance, still consistent), which already exceeds what a
+        // shortest path can have left there, so a short leg on a big map costs a short search.
+        let mut start_left = cell_corners(s);
+        start_left.sort_unstable();
+        start_left.dedup();
+        let mut stop: Option<u32> = None;
         let step = |k: usize| -> isize {
             let w = w as isize;
             [1, -1, w, -w, w + 1, -w - 1, -w + 1, w - 1][k]
         };
         let mut d = 0u32;
         while queued > 0 {
+            if let Some(cap) = stop.filter(|&cap| d > cap) {
+                for v in &mut dist {
+                    *v = (*v).min(cap + 1);
+                }
+                return dist;
+            }
             let b = d as usize % nb;
             while let Some(u) = buckets[b].pop() {
                 queued -= 1;
                 let u = u as usize;
                 if dist[u] != d {
                     continue;
+                }
+                if stop.is_none() && !start_left.is_empty() {
+                    start_left.retain(|&p| p != u);
+                    if start_left.is_empty() {
+                        let far = f64::from(d) * LATTICE_STRETCH + 4.0 * LATTICE_UNIT;
+                        stop = Some(far.ceil().min(f64::from(u32::MAX / 2)) as u32);
+                    }
                 }
                 let mut m = self.steps[u];
                 while m != 0 {
