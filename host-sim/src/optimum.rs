@@ -337,16 +337,36 @@ impl Corners {
         self.search(a, b, FOV_MIN, FOV_BUDGET)
     }
 
+    /// [`Self::shortest`] and the path's points, from `a` to `b` (metres): its straight
+    /// pieces are one fewer.
+    pub fn shortest_path(&self, a: Point, b: Point) -> Option<(f64, Vec<Point>)> {
+        self.search_path(a, b, FOV_MIN, FOV_BUDGET).map(|(d, pts)| {
+            let m = |p: (f64, f64)| Point::new((p.0 * self.cell) as f32, (p.1 * self.cell) as f32);
+            (d, pts.into_iter().map(m).collect())
+        })
+    }
+
     /// [`Self::shortest`], casting shadows from a corner when the map has at least `fov_min`
     /// corners, each cast giving up after `fov_budget` cells per corner (and at least
     /// `FOV_CELLS`).
     fn search(&self, a: Point, b: Point, fov_min: usize, fov_budget: usize) -> Option<f64> {
+        self.search_path(a, b, fov_min, fov_budget).map(|(d, _)| d)
+    }
+
+    /// [`Self::search`] with the path's points (cell units).
+    fn search_path(
+        &self,
+        a: Point,
+        b: Point,
+        fov_min: usize,
+        fov_budget: usize,
+    ) -> Option<(f64, Vec<(f64, f64)>)> {
         let s = (a.x as f64 / self.cell, a.y as f64 / self.cell);
         let g = (b.x as f64 / self.cell, b.y as f64 / self.cell);
         let dist =
             |p: (f64, f64), q: (f64, f64)| ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt();
         if self.sees(s, g) {
-            return Some(dist(s, g) * self.cell);
+            return Some((dist(s, g) * self.cell, vec![s, g]));
         }
         let to_goal = self.lattice_to(g, s);
         let w = self.cols + 1;
@@ -386,7 +406,14 @@ impl Corners {
                 continue;
             }
             if u == n {
-                return Some(best[n] * self.cell);
+                let mut points = vec![g];
+                let mut v = n;
+                while v != n + 1 {
+                    v = parent[v];
+                    points.push(pos(v));
+                }
+                points.reverse();
+                return Some((best[n] * self.cell, points));
             }
             closed[u] = true;
             let pu = pos(u);
@@ -1017,6 +1044,14 @@ mod tests {
             .unwrap();
         let want = 2.0 * (2.0f64 * 2.0 + 1.0).sqrt() + 2.0;
         assert!((d - want).abs() < 1e-9, "{d} vs {want}");
+        // Its points: the start, two corners of the block, the goal.
+        let (len, pts) = k
+            .shortest_path(Point::new(2.0, 5.0), Point::new(8.0, 5.0))
+            .unwrap();
+        assert_eq!(len, d);
+        assert_eq!(pts.len(), 4, "{pts:?}");
+        let sum: f64 = pts.windows(2).map(|w| f64::from(w[0].dist(w[1]))).sum();
+        assert!((sum - d).abs() < 1e-5, "{sum} vs {d}");
         // Along the block's face: a straight segment touching the wall is allowed.
         let d = k
             .shortest(Point::new(2.0, 4.0), Point::new(8.0, 4.0))

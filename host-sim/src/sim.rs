@@ -145,9 +145,21 @@ impl Prepared {
     /// the leg is not run).
     pub fn warn_narrow_legs(&self, cfg: Config, budget: &dyn Fn(usize) -> Option<String>) {
         let e_max = self.config(cfg).search.e_max;
-        for (k, p) in self.narrow_legs(e_max) {
+        let legs = self.narrow_legs(e_max);
+        if legs.is_empty() {
+            return;
+        }
+        // The exact shortest path of each named leg: how many straight pieces a tree path
+        // needs about.
+        let grid = self.scenario.reach_grid();
+        let corners = crate::optimum::Corners::of(&grid);
+        let starts = crate::optimum::leg_starts(&self.scenario);
+        for (k, p) in legs {
             let Some(budget) = budget(k) else { continue };
-            let w = narrow_warning(k, &p, e_max, &budget);
+            let pieces = corners
+                .shortest_path(starts[k], self.scenario.goals[k])
+                .map(|(_, pts)| pts.len() - 1);
+            let w = narrow_warning(k, &p, e_max, &budget, pieces);
             eprintln!("warning: {} on {}, {w}", cfg.name(), self.scenario.name);
         }
     }
@@ -543,12 +555,25 @@ pub fn narrow_warning(
     p: &crate::grid_planners::Passages,
     e_max: f32,
     budget: &str,
+    pieces: Option<usize>,
 ) -> String {
+    // A tree path joining the goal has about a node a straight piece of the shortest path.
+    let nodes = pieces.map_or(String::new(), |n| {
+        format!(
+            "; its exact shortest path has {n} straight pieces, so a tree path to the goal \
+             needs about {n} nodes and the two trees hold {NODES} each{}",
+            if n > 2 * NODES {
+                ": more than they can hold"
+            } else {
+                ""
+            }
+        )
+    });
     format!(
         "leg {}: {:.0} m of its {:.0} m shortest grid path run through passages narrower than \
-         e_max / 4 ({:.2} m; median width {:.2} m): sampling trees, this planner's and OMPL's, \
-         cross long narrow corridors slowly and may not reach this goal {budget}; a grid \
-         planner finds it in milliseconds (`host-sim optimum` runs A* and Theta*; \
+         e_max / 4 ({:.2} m; median width {:.2} m){nodes}: sampling trees, this planner's and \
+         OMPL's, cross long narrow corridors slowly and may not reach this goal {budget}; a \
+         grid planner finds it in milliseconds (`host-sim optimum` runs A* and Theta*; \
          docs/performance.md, \"Grid planners or this planner\")",
         k + 1,
         p.narrow_m,

@@ -164,11 +164,19 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
     let p = narrow[0].1;
     assert!(p.narrow_m > 0.6 * p.length_m, "{p:?}");
     assert_eq!(p.median_width_m, 1.0);
-    let w = host_sim::sim::narrow_warning(0, &p, e_max, "within the leg's 4000 calls");
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "within the leg's 4000 calls", None);
     assert!(
         w.starts_with("leg 1: ") && w.contains("median width 1.00 m"),
         "{w}"
     );
+    // With the exact path's pieces: the nodes a tree path needs, against both trees.
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(700));
+    assert!(
+        w.contains("700 straight pieces") && !w.contains("more than"),
+        "{w}"
+    );
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(20_000));
+    assert!(w.contains("more than they can hold"), "{w}");
     // A maze of 8 m corridors in 1 m cells (256 m across): wider than e_max / 4.
     let wide = maze(16, 7);
     let wide = Scenario {
