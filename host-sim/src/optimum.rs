@@ -27,14 +27,15 @@
 //!
 //! The figures are those of the plain search (every corner from every corner, the straight
 //! line as heuristic) to the bit (`the_prunings_change_no_figure`: 400 random maps;
-//! `..._on_a_maze`: 1-cell corridors with loops). `host-sim optimum` prints each leg's figure and CPU time: nav2's
-//! warehouse (1,006 x 1,674 cells of 0.03 m) 0.06-0.16 s a leg (0.04-1.6 s before), a 1,024-cell map
-//! of 900 blocks 0.04-0.07 s, mazes of 1-cell corridors of 129, 511, 2,047 and 4,095 cells
-//! 0.004 s, 0.03-0.05 s (25-40 s before), 0.5-0.9 s and 1.9-3.1 s (2.9 million corners, legs
-//! of 216-690 km), a 4,096-cell building drawn like a SLAM map at 0.05 m (38,456 corners)
-//! 0.9-2.6 s for legs across it (26-110 s before; the lattice's Dijkstra over 16.8 million
-//! points is about 0.7-0.9 s of it, the machine's noise the spread), 0.17-0.47 s for legs of
-//! 19-83 m in it (the Dijkstra stops past the start): `scripts/gen-maps.py --big`.
+//! `..._on_a_maze`: 1-cell corridors with loops). `host-sim optimum` prints each leg's figure
+//! and CPU time: nav2's warehouse (1,006 x 1,674 cells of 0.03 m) 0.06-0.16 s a leg
+//! (0.04-1.6 s before), a 1,024-cell map of 900 blocks 0.03-0.07 s, mazes of 1-cell corridors
+//! of 129, 511, 2,047 and 4,095 cells 0.004 s, 0.03-0.05 s (25-40 s before), 0.5-0.9 s and
+//! 1.9-3.1 s (2.9 million corners, legs of 216-690 km), a 4,096-cell building drawn like a
+//! SLAM map at 0.05 m (38,456 corners) 0.9-2.6 s for legs across it (26-110 s before; the
+//! lattice's Dijkstra over 16.8 million points is about 0.7-0.9 s of it, the machine's noise
+//! the spread), 0.17-0.47 s for legs of 19-83 m in it (the Dijkstra stops past the start):
+//! `scripts/gen-maps.py --big`.
 //!
 //! Checked against the exact optima of the 24 reference legs in
 //! `../shared/anchors/reference-figures.md` (test `optima_match_the_reference_figures`).
