@@ -12,14 +12,14 @@
 //! that can beat the current best are expanded.
 //!
 //! Prunings that keep it exact make it scale (issue 42):
-//! - **The heuristic is the lattice's distance to the goal** ([`Corners::lattice_to`], one
+//! - **The heuristic is the lattice's distance to the goal** (`Corners::lattice_to`, one
 //!   Dijkstra per leg with Dial's buckets over the cells' corners, steps along free grid lines
 //!   and across free cells): every free segment has a staircase over the cells it crosses at
 //!   most 1.0824 times as long, so that distance over 1.0824, less the goal cell's half
 //!   diagonal, never exceeds the distance left and is consistent; in a maze or a building it
 //!   follows the corridors and doors where the straight line does not.
 //! - **From a corner, only the corners in view**, found by casting shadows row by row in four
-//!   quadrants ([`Corners::lattice_in_view`]: a superset, `sees` decides), and only on the
+//!   quadrants (`Corners::lattice_in_view`: a superset, `sees` decides), and only on the
 //!   side that keeps the path taut round the corner's occupied cell (a shortest path bends
 //!   only round it); none of them head on into its cell (no taut way on from there).
 //! - **A segment is walked crossing by crossing** and dropped at its first blocked piece, the
@@ -330,8 +330,8 @@ impl Corners {
     /// `None` when the goal cannot be reached.
     ///
     /// A* over the visibility graph with prunings that keep it exact (module docs): the
-    /// lattice's distance to the goal as heuristic ([`Self::lattice_to`]); from a corner, only
-    /// the corners in view ([`Self::lattice_in_view`]) on the side that keeps the path taut
+    /// lattice's distance to the goal as heuristic (`Self::lattice_to`); from a corner, only
+    /// the corners in view (`Self::lattice_in_view`) on the side that keeps the path taut
     /// round its occupied cell; no edge into a corner head on; an edge tested only when it
     /// can still beat the goal's label.
     pub fn shortest(&self, a: Point, b: Point) -> Option<f64> {
