@@ -1025,6 +1025,17 @@ fn cache_write(key: u64, d: Option<f64>) {
     });
 }
 
+/// A xorshift generator for the tests' random maps.
+#[cfg(test)]
+pub(crate) fn xorshift(mut state: u64) -> impl FnMut() -> u64 {
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1087,13 +1098,7 @@ mod tests {
     /// 0.05 m cells), ends anywhere in free cells, and on a maze of 1-cell corridors.
     #[test]
     fn the_prunings_change_no_figure() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1du64);
         for case in 0..400 {
             let (w, h) = (8 + (next() % 40) as u16, 8 + (next() % 40) as u16);
             let density = [10, 25, 40][case % 3];
@@ -1141,13 +1146,7 @@ mod tests {
     /// than one way), at the defaults (enough corners for the shadows) and casting always.
     #[test]
     fn the_prunings_change_no_figure_on_a_maze() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15u64);
         // Depth-first carving of 30 x 30 rooms: 61 x 61 cells.
         let n = 30usize;
         let side = 2 * n + 1;
