@@ -259,8 +259,8 @@ fn noise(seed: u64, c: u16, r: u16) -> f64 {
 }
 
 /// The classes of maps users bring (issue 42), generated: mazes of 1-cell and 8-cell
-/// corridors, 10 % and 40 % random clutter, rooms with 1 m doors at 0.25 m, a 1,024-cell open
-/// map of blocks. Cells next to the start and goals are kept free.
+/// corridors, 10 % and 40 % random clutter, rooms with 1 m doors at 0.25 m, a small building
+/// like a SLAM map at 0.05 m, a 1,024-cell open map of blocks. Cells next to the start and goals are kept free.
 fn classes() -> Vec<Scenario> {
     let mut v = Vec::new();
     let mut m1 = maze(32, 11);
@@ -335,6 +335,33 @@ fn classes() -> Vec<Scenario> {
         (5.0, 5.0),
         &[(45.0, 45.0), (5.0, 45.0), (45.0, 5.0)],
     ));
+    // A small building drawn like a SLAM map: 20 x 20 m at 0.05 m, an outer wall of 4 cells,
+    // inner walls of 3 with 0.9 m doors (18 cells), furniture, specks of sensor noise (one
+    // cell in 2,000).
+    let ends = [(0.5f32, 0.5f32), (19.5, 19.5), (0.5, 19.5), (19.5, 0.5)];
+    v.push(scenario(
+        "small building like a SLAM map (20 x 20 m at 0.05 m)",
+        400,
+        400,
+        0.05,
+        |c, r| {
+            let near = ends.iter().any(|&(x, y)| {
+                (f32::from(c) * 0.05 + 0.025 - x).abs() < 0.3
+                    && (f32::from(r) * 0.05 + 0.025 - y).abs() < 0.3
+            });
+            let outer = c < 4 || r < 4 || c >= 396 || r >= 396;
+            let vertical = ((130..133).contains(&c) && !(60..78).contains(&r))
+                || ((270..273).contains(&c) && !(300..318).contains(&r));
+            let horizontal = (200..203).contains(&r)
+                && ![50..68, 200..218, 330..348].iter().any(|d| d.contains(&c));
+            let furniture = [(40, 250, 30, 20), (180, 80, 40, 25), (300, 120, 20, 40)]
+                .iter()
+                .any(|&(x, y, w, h)| (x..x + w).contains(&c) && (y..y + h).contains(&r));
+            !near && (outer || vertical || horizontal || furniture || noise(9, c, r) < 0.0005)
+        },
+        ends[0],
+        &ends[1..],
+    ));
     v.push(scenario(
         "open 1,024 x 1,024 m with blocks",
         1024,
@@ -362,7 +389,7 @@ fn classes() -> Vec<Scenario> {
 /// ([`host_sim::sim::Prepared::narrow_legs`]; the legs from the first named one on are not
 /// run). Prints each leg's outcome.
 #[test]
-#[ignore = "long: six generated maps, all legs (cargo test --release -- --ignored)"]
+#[ignore = "long: seven generated maps, all legs (cargo test --release -- --ignored)"]
 fn every_class_of_map_reaches_its_goals_or_names_them_first() {
     use host_sim::sim::{Prepared, drive, with_planner};
     let tuned = bi_am_rrt::Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
