@@ -57,10 +57,10 @@ const LATTICE_STRETCH: f64 = 1.082_393;
 /// The farthest a corner of the goal's cell is from the goal.
 const GOAL_CELL: f64 = std::f64::consts::SQRT_2;
 
-/// Below this many candidate corners a search scans them all from every corner.
+/// On a map of fewer corners a search scans them all from every corner.
 const FOV_MIN: usize = 256;
-/// A corner's shadow casting gives up after this many cells per candidate corner (and the
-/// search scans the candidates instead).
+/// A corner's shadow casting gives up after this many cells per corner of the map (and the
+/// search scans every corner instead).
 const FOV_BUDGET: usize = 64;
 /// ... and never before this many cells.
 const FOV_CELLS: usize = 1 << 21;
@@ -435,20 +435,7 @@ impl Corners {
                 } else {
                     far
                 };
-                // A taut way on lies on the far side of the way back and of the cell's
-                // diagonal, in the sense that turns from one to the other (`taut`).
-                let mut halves = Vec::new();
-                let cross = a.0 * w.1 - a.1 * w.0;
-                if cross != 0.0 {
-                    let sign = cross.signum();
-                    let unit = |v: (f64, f64)| {
-                        let l = (v.0 * v.0 + v.1 * v.1).sqrt();
-                        (v.0 / l, v.1 / l)
-                    };
-                    let (a, w) = (unit(a), unit(w));
-                    halves.push((-sign * a.1, sign * a.0));
-                    halves.push((-sign * w.1, sign * w.0));
-                }
+                let halves = taut_halves(a, w);
                 stamp += 1;
                 view.clear();
                 let budget = n.saturating_mul(fov_budget).max(FOV_CELLS);
@@ -835,6 +822,25 @@ fn taut(a: (f64, f64), b: (f64, f64), w: (f64, f64)) -> bool {
         return a.0 * b.0 + a.1 * b.1 < 0.0;
     }
     cross(a, w) * ab > 0.0 && cross(w, b) * ab > 0.0
+}
+
+/// The half-planes `{b : n . b >= 0}` (their normals `n`) where a way on `b` from a corner
+/// reached from direction `a` (the corner to the previous vertex), round the occupied cell
+/// whose diagonal from the corner is `w`, can be [`taut`]: on the far side of `a` and of `w`,
+/// in the sense that turns from one to the other. No half-plane (no restriction) when `a`
+/// runs along `w`: then `taut` itself refuses every way on but straight on.
+fn taut_halves(a: (f64, f64), w: (f64, f64)) -> Vec<(f64, f64)> {
+    let cross = a.0 * w.1 - a.1 * w.0;
+    if cross == 0.0 {
+        return Vec::new();
+    }
+    let sign = cross.signum();
+    let unit = |v: (f64, f64)| {
+        let l = (v.0 * v.0 + v.1 * v.1).sqrt();
+        (v.0 / l, v.1 / l)
+    };
+    let (a, w) = (unit(a), unit(w));
+    vec![(-sign * a.1, sign * a.0), (-sign * w.1, sign * w.0)]
 }
 
 /// `x.floor()` as an integer, for any sign.
