@@ -713,6 +713,12 @@ impl Corners {
         let mut start_left = cell_corners(s);
         start_left.sort_unstable();
         start_left.dedup();
+        // Their span of indices: a settled point outside it is none of them (one comparison
+        // a point instead of a look through the list).
+        let span = (
+            start_left.first().copied().unwrap_or(usize::MAX),
+            start_left.last().copied().unwrap_or(0),
+        );
         let mut stop: Option<u32> = None;
         let step = |k: usize| -> isize {
             let w = w as isize;
@@ -733,7 +739,7 @@ impl Corners {
                 if dist[u] != d {
                     continue;
                 }
-                if stop.is_none() && !start_left.is_empty() {
+                if (span.0..=span.1).contains(&u) && stop.is_none() && !start_left.is_empty() {
                     start_left.retain(|&p| p != u);
                     if start_left.is_empty() {
                         let far = f64::from(d) * LATTICE_STRETCH + 4.0 * LATTICE_UNIT;
