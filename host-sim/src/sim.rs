@@ -51,6 +51,9 @@ pub struct Prepared {
     /// Each leg's 8-connected grid path over the cells with room, once computed
     /// ([`Prepared::grid_paths`]).
     grid_paths: OnceLock<Vec<Option<crate::grid_planners::GridPath>>>,
+    /// The straight pieces of each leg's exact shortest path, once computed
+    /// ([`Prepared::warn_narrow_legs`]).
+    pieces: OnceLock<Vec<Option<usize>>>,
 }
 
 impl Prepared {
@@ -68,6 +71,7 @@ impl Prepared {
             bake_seconds: OnceLock::new(),
             table,
             optima: OnceLock::new(),
+            pieces: OnceLock::new(),
             no_optimum: false,
             grid_paths: OnceLock::new(),
         }
@@ -149,17 +153,22 @@ impl Prepared {
         if legs.is_empty() {
             return;
         }
-        // The exact shortest path of each named leg: how many straight pieces a tree path
-        // needs about.
-        let grid = self.scenario.reach_grid();
-        let corners = crate::optimum::Corners::of(&grid);
-        let starts = crate::optimum::leg_starts(&self.scenario);
+        // The exact shortest path of each leg (once per scenario, whichever planners ask):
+        // how many straight pieces a tree path needs about.
+        let pieces = self.pieces.get_or_init(|| {
+            use rayon::prelude::*;
+            let grid = self.scenario.reach_grid();
+            let corners = crate::optimum::Corners::of(&grid);
+            let starts = crate::optimum::leg_starts(&self.scenario);
+            starts
+                .par_iter()
+                .zip(&self.scenario.goals)
+                .map(|(&a, &b)| corners.shortest_path(a, b).map(|(_, pts)| pts.len() - 1))
+                .collect()
+        });
         for (k, p) in legs {
             let Some(budget) = budget(k) else { continue };
-            let pieces = corners
-                .shortest_path(starts[k], self.scenario.goals[k])
-                .map(|(_, pts)| pts.len() - 1);
-            let w = narrow_warning(k, &p, e_max, &budget, pieces);
+            let w = narrow_warning(k, &p, e_max, &budget, pieces[k]);
             eprintln!("warning: {} on {}, {w}", cfg.name(), self.scenario.name);
         }
     }
