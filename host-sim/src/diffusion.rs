@@ -812,23 +812,19 @@ impl TableOptions {
         edges: &CellEdges,
         dims: usize,
     ) -> Result<(Self, Aggregation)> {
-        let first = self.aggregation(edges, dims);
-        if first.is_ok() || self.max_bytes != 0 {
-            return first.map(|a| (*self, a));
-        }
         let auto = self.budget(edges.cols as usize * edges.rows as usize);
-        let mut last = first;
+        let mut fitted = self.aggregation(edges, dims).map(|a| (*self, a));
         for factor in [2, 4, 8, 16, 32, 64] {
+            if fitted.is_ok() || self.max_bytes != 0 {
+                break;
+            }
             let raised = Self {
                 max_bytes: auto * factor,
                 ..*self
             };
-            match raised.aggregation(edges, dims) {
-                Ok(a) => return Ok((raised, a)),
-                Err(e) => last = Err(e),
-            }
+            fitted = raised.aggregation(edges, dims).map(|a| (raised, a));
         }
-        last.map(|a| (*self, a))
+        fitted
     }
 
     /// The coarsening factor used for a graph of `cols x rows` cells with `dims` coordinates

@@ -514,31 +514,13 @@ impl Corners {
         let mut looked = 0usize;
         let mut rays: Vec<(f64, f64)> = Vec::new();
         let mut next: Vec<(f64, f64)> = Vec::new();
-        // A quadrant's frame: lateral x' and depth y' (rows d of y' in [d - 1, d]) to the
-        // grid's cells and lattice points.
-        type Frame = fn((i64, i64), i64, i64) -> (i64, i64);
-        // Each quadrant's lateral and depth unit vectors in the grid's frame (for `halves`).
-        let axes = [
-            ((1.0, 0.0), (0.0, -1.0)),
-            ((1.0, 0.0), (0.0, 1.0)),
-            ((0.0, 1.0), (1.0, 0.0)),
-            ((0.0, 1.0), (-1.0, 0.0)),
-        ];
-        let quadrants: [(Frame, Frame); 4] = [
-            // Rows upwards (grid y decreasing).
-            (|(i, j), c, d| (i + c, j - d), |(i, j), x, y| (i + x, j - y)),
-            // Downwards.
-            (
-                |(i, j), c, d| (i + c, j + d - 1),
-                |(i, j), x, y| (i + x, j + y),
-            ),
-            // Rightwards.
-            (
-                |(i, j), c, d| (i + d - 1, j + c),
-                |(i, j), x, y| (i + y, j + x),
-            ),
-            // Leftwards.
-            (|(i, j), c, d| (i - d, j + c), |(i, j), x, y| (i - y, j + x)),
+        // A quadrant's frame: lateral x' and depth y' (rows d of y' in [d - 1, d]), their unit
+        // vectors in the grid's frame: up (grid y decreasing), down, right, left.
+        let axes: [((i64, i64), (i64, i64)); 4] = [
+            ((1, 0), (0, -1)),
+            ((1, 0), (0, 1)),
+            ((0, 1), (1, 0)),
+            ((0, 1), (-1, 0)),
         ];
         let inside = |(c, r): (i64, i64)| c >= 0 && r >= 0 && c < self.cols && r < self.rows;
         // Slope (x' / y') of a lattice point of the frame; a point at depth 0 lies on the
@@ -556,13 +538,24 @@ impl Corners {
                 x as f64 / y as f64
             }
         };
-        for ((cell_at, point_at), (lat, dep)) in quadrants.into_iter().zip(axes) {
+        for (lat, dep) in axes {
+            // The lattice point at (x', y') of the frame, and the cell of column c in row d
+            // (the one holding the frame's point (c + 1/2, d - 1/2)), in the grid's frame.
+            let point_at =
+                |x: i64, y: i64| (i0 + x * lat.0 + y * dep.0, j0 + x * lat.1 + y * dep.1);
+            let cell_at = |c: i64, d: i64| {
+                let (x2, y2) = (2 * c + 1, 2 * d - 1);
+                (
+                    (2 * i0 + x2 * lat.0 + y2 * dep.0).div_euclid(2),
+                    (2 * j0 + x2 * lat.1 + y2 * dep.1).div_euclid(2),
+                )
+            };
             // The quadrant's slopes t in [-1, 1] whose direction t lat + dep keeps to every
             // half-plane {b : n . b >= 0} (widened by EPS).
             let (mut lo, mut hi) = (-1.0f64, 1.0f64);
             for &(nx, ny) in halves {
-                let p = nx * lat.0 + ny * lat.1;
-                let q = nx * dep.0 + ny * dep.1;
+                let p = nx * lat.0 as f64 + ny * lat.1 as f64;
+                let q = nx * dep.0 as f64 + ny * dep.1 as f64;
                 if p > 0.0 {
                     lo = lo.max((-EPS - q) / p);
                 } else if p < 0.0 {
@@ -590,7 +583,7 @@ impl Corners {
                     let mark = next.len();
                     let mut c = c0;
                     while c <= c1 {
-                        let cell = cell_at((i0, j0), c, d);
+                        let cell = cell_at(c, d);
                         let occupied = if inside(cell) {
                             any_inside = true;
                             looked += 1;
@@ -623,7 +616,7 @@ impl Corners {
                             // The ray along the frame's axis (x' = 0) runs between cells -1
                             // and 0: shut when both are occupied.
                             if c == -1 && {
-                                let other = cell_at((i0, j0), 0, d);
+                                let other = cell_at(0, d);
                                 !inside(other) || self.occ(other.0, other.1)
                             } {
                                 smax = EPS;
@@ -639,7 +632,7 @@ impl Corners {
                             }
                         } else {
                             for (x, y) in [(c, d - 1), (c + 1, d - 1), (c, d), (c + 1, d)] {
-                                let (i, j) = point_at((i0, j0), x, y);
+                                let (i, j) = point_at(x, y);
                                 found(i, j);
                             }
                         }
