@@ -132,7 +132,7 @@ pub enum SetupError {
     Map,
     /// The metric was not made for this map: a diffusion table baked from another grid
     /// (`DiffusionTable::check_map`).
-    Metric(crate::metric::TableError),
+    Metric(TableError),
     /// The configuration's `robot_radius` is larger than the radius the map's grid was
     /// inflated for (`Map::with_body`, `Map::with_baked_body`; 0 without a body).
     Body,
@@ -214,6 +214,42 @@ error_enum! {
         NotFinite => "position is NaN or infinite",
     }
 }
+
+/// Why a diffusion table was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TableError {
+    /// Fewer bytes than the header, or than the payload the header announces.
+    Truncated,
+    /// The magic bytes are wrong: not a table.
+    BadMagic,
+    /// A format version this build cannot read.
+    UnsupportedVersion,
+    /// A header field is out of range (element kind, dimensions, sizes, cell size, scale).
+    BadHeader,
+    /// The payload does not match its checksum.
+    BadChecksum,
+    /// The table was baked from another map than the one it is used with
+    /// ([`DiffusionTable::check_map`](crate::metric::DiffusionTable::check_map)).
+    WrongMap,
+}
+
+impl core::fmt::Display for TableError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Truncated => "table truncated",
+            Self::BadMagic => "not a diffusion table (bad magic)",
+            Self::UnsupportedVersion => "unsupported table version",
+            Self::BadHeader => "table header out of range",
+            Self::BadChecksum => "table checksum mismatch",
+            Self::WrongMap => {
+                "the table was baked from another map (its size, cell size or contents differ)"
+            }
+        })
+    }
+}
+
+impl core::error::Error for TableError {}
 
 #[cfg(test)]
 mod tests {
