@@ -116,7 +116,7 @@
 
 pub mod agent;
 pub mod builtin;
-pub mod clearance;
+pub use map::clearance;
 pub mod clock;
 pub mod config;
 #[cfg(feature = "cortex-m")]
