@@ -1,0 +1,213 @@
+//! Meet and graft of the two trees (paper Algorithm 1's bidirectional search, section 3.3),
+//! and, in the tuned profile, RRT-Connect's greedy step; the module's "Meet and graft".
+
+use super::*;
+
+impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
+    Planner<'s, 'm, M, R, N, B, K>
+{
+    /// Tuned profile: the other tree walks straight towards node `new` of one tree (`forward`
+    /// tells which), and the two are grafted when it reaches it (module docs). `blocked`:
+    /// nodes of the other tree whose segment to `new` the meet test found blocked (not
+    /// tested again).
+    pub(super) fn connect<C: Clock + ?Sized>(
+        &mut self,
+        new: NodeId,
+        forward: bool,
+        blocked: &[NodeId],
+        meter: &Meter<'_, C>,
+    ) {
+        if !self.cfg.profile.is_tuned() {
+            return;
+        }
+        let env = Env {
+            map: &self.map,
+            metric: &self.metric,
+            cfg: &self.cfg,
+            call: self.call,
+        };
+        let step = self.cfg.search_step();
+        let pair = if forward {
+            let p = self.fwd.pos(new);
+            self.rev
+                .connect(&env, p, step, blocked, meter)
+                .map(|b| (new, b))
+        } else {
+            let p = self.rev.pos(new);
+            self.fwd
+                .connect(&env, p, step, blocked, meter)
+                .map(|a| (a, new))
+        };
+        if let Some((a, b)) = pair {
+            self.meet(a, b, meter);
+        }
+    }
+
+    /// Grafts the reverse tree below forward node `a` at reverse node `b` (their segment tested
+    /// free) and records the goal joining; returns whether the graft was made.
+    pub(super) fn meet<C: Clock + ?Sized>(
+        &mut self,
+        a: NodeId,
+        b: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> bool {
+        let segment = [self.fwd.pos(a), self.rev.pos(b)];
+        let met = self.graft(a, b, meter);
+        if met {
+            self.stats.met = true;
+            self.stats.meet = Some(segment);
+            self.goal_joined(meter);
+        }
+        met
+    }
+
+    /// Meet test for a node just added to one tree (`forward` tells which) against the other,
+    /// and graft on success (module docs). `Ok` when the trees met; otherwise `Err` with the
+    /// nodes of the other tree whose segment to `new` was found blocked (none when a free pair
+    /// was found but the graft was refused).
+    pub(super) fn try_meet<C: Clock + ?Sized>(
+        &mut self,
+        new: NodeId,
+        forward: bool,
+        meter: &Meter<'_, C>,
+    ) -> Result<(), heapless::Vec<NodeId, MEET_PAIRS>> {
+        let (this, other) = if forward {
+            (&*self.fwd, &*self.rev)
+        } else {
+            (&*self.rev, &*self.fwd)
+        };
+        let p = this.pos(new);
+        let c_new = this.cost(new);
+        let sigma = self.cfg.search.sigma;
+        // The MEET_PAIRS cheapest candidates, kept sorted by total cost.
+        let mut best: heapless::Vec<(Cost, NodeId), MEET_PAIRS> = heapless::Vec::new();
+        let mut seen = 0u32;
+        let _ = other
+            .index
+            .for_each_within(p, sigma, other.tree.positions(), |id, d2| {
+                seen = seen.saturating_add(1);
+                let c_other = other.cost(id);
+                let total = Cost {
+                    length: c_new.length + crate::geometry::sqrt(d2) + c_other.length,
+                    blocked: c_new.blocked || c_other.blocked,
+                };
+                let at = best.partition_point(|(c, _)| *c <= total);
+                if at < MEET_PAIRS {
+                    if best.is_full() {
+                        best.pop();
+                    }
+                    let _ = best.insert(at, (total, id));
+                }
+                core::ops::ControlFlow::Continue(())
+            });
+        meter.charge(seen.saturating_add(4));
+        let env = Env {
+            map: &self.map,
+            metric: &self.metric,
+            cfg: &self.cfg,
+            call: self.call,
+        };
+        let mut partner = best
+            .iter()
+            .find(|(_, id)| env.free(p, other.pos(*id), meter))
+            .map(|&(_, id)| id);
+        // The paper's Meet: any pair within sigma with a free segment (AsPrinted::meet_all_pairs).
+        if partner.is_none() && self.cfg.as_printed.meet_all_pairs && best.is_full() {
+            let call = self.call;
+            let _ = other
+                .index
+                .for_each_within(p, sigma, other.tree.positions(), |id, _| {
+                    if meter.expired(&call) {
+                        return core::ops::ControlFlow::Break(());
+                    }
+                    meter.charge(1);
+                    if best.iter().all(|&(_, b)| b != id) && env.free(p, other.pos(id), meter) {
+                        partner = Some(id);
+                        return core::ops::ControlFlow::Break(());
+                    }
+                    core::ops::ControlFlow::Continue(())
+                });
+        }
+        let Some(partner) = partner else {
+            let mut blocked = heapless::Vec::new();
+            for &(_, id) in &best {
+                let _ = blocked.push(id);
+            }
+            return Err(blocked);
+        };
+        let (a, b) = if forward {
+            (new, partner)
+        } else {
+            (partner, new)
+        };
+        if self.meet(a, b, meter) {
+            Ok(())
+        } else {
+            Err(heapless::Vec::new())
+        }
+    }
+
+    /// Grafts the reverse tree's trunk from `b` to its root (the goal) below forward node `a`,
+    /// recycling forward leaves when the arena lacks room. Refused (returns false) when the
+    /// trunk cannot fit.
+    pub(super) fn graft<C: Clock + ?Sized>(
+        &mut self,
+        a: NodeId,
+        b: NodeId,
+        meter: &Meter<'_, C>,
+    ) -> bool {
+        let rev = &self.rev.tree;
+        let mut depth = 0usize;
+        let mut v = Some(b);
+        while let Some(x) = v {
+            depth = depth.saturating_add(1);
+            if depth > rev.len() {
+                return false;
+            }
+            v = rev.parent(x);
+        }
+        let mut parent = a;
+        let need = self.fwd.tree.len().saturating_add(depth).saturating_sub(N);
+        if need > 0 {
+            // Make room: recycle forward leaves (never `a` or its ancestors, which have
+            // children). Refused when the trunk alone would not fit.
+            self.full = true;
+            let goal = self.goal.map_or(self.rev.pos(b), |g| g.pos);
+            if depth >= N {
+                return false;
+            }
+            let mut keep = [parent];
+            for _ in 0..need {
+                if !self.fwd.recycle(&mut self.rng, goal, &mut keep, meter) {
+                    return false;
+                }
+            }
+            parent = keep[0];
+        }
+        meter.charge(units(depth).saturating_mul(4));
+        // The meeting segment was tested free; each later edge keeps both of its flags (an
+        // edge through a marked cell stays walled, or re-flagging for an obstacle would clear
+        // it).
+        // The meeting segment's clearance class is measured; the trunk's edges keep theirs.
+        let (mut blocked, mut walled) = (false, false);
+        let mut class = self.clearance_class(self.fwd.pos(parent), self.rev.pos(b), meter);
+        let mut v = Some(b);
+        while let Some(x) = v {
+            let pos = self.rev.pos(x);
+            match self.fwd.insert(pos, parent, Edge { blocked, class }) {
+                Ok(id) => parent = id,
+                Err(_) => return false,
+            }
+            if walled {
+                self.fwd.tree.set_edge_walled(parent, true);
+            }
+            (blocked, walled) = self.rev.tree.edge_sources(x);
+            class = self.rev.tree.edge_class(x).unwrap_or(0);
+            v = self.rev.tree.parent(x);
+        }
+        if let Some(goal) = self.goal.as_mut() {
+            goal.node = Some(parent);
+        }
+        true
+    }
+}
