@@ -11,22 +11,43 @@
 //!
 //! ## Architecture
 //!
-//! One concept per module, in the order the paper introduces them:
+//! The modules in the order data flows through a `plan` call; the file list reads the same way
+//! (modules in `code` are private: the planner's own work, no API).
 //!
-//! - [`geometry`]: points, segments, uniform sampling in a disc and in the informed ellipse.
-//! - [`map`]: the occupancy grid borrowed from bit-packed bytes (flash-friendly), dynamic
-//!   circular obstacles (still, or moving with a reported velocity), the exact `free_path`
-//!   collision test, and the robot's body (a disc: the grid inflated once, exact near walls).
-//! - [`clearance`]: the clearance preference, a field of a byte per cell and each edge's
-//!   class (beyond the paper; feature `clearance`).
-//! - [`tree`]: the fixed-capacity tree arena with cached, blocked-aware path costs, edge
-//!   updates and re-rooting.
-//! - [`index`]: the bucket-grid spatial index for `Nearest` and `Nearby`.
-//! - [`clock`]: the caller's clock, deadlines for the time budgets, and a fake/virtual clock;
-//!   `cortex` (feature `cortex-m`): SysTick and DWT clocks for the chip.
-//! - [`motion`]: the waypoint rule against moving obstacles (beyond the paper).
-//! - [`sweep`]: bounded queue, stack and seen-set for the rewiring sweeps.
-//! - [`error`]: the small error enums.
+//! 1. What the caller gives:
+//!    - [`geometry`]: points, segments, uniform sampling in a disc and in the informed ellipse.
+//!    - [`config`]: [`Config`], its groups and the named configurations of the paper's
+//!      Table 1 (the 20 planners are configurations of one planner), the paper's Table 2
+//!      values and the lengths fitted to a map.
+//!    - [`map`]: the world. `map/grid.rs` borrows a bit-packed occupancy grid (it can sit in
+//!      flash) and holds the exact `free_path` test; `obstacles.rs` the dynamic circles, still
+//!      or moving; `live.rs` the live cells a lidar marks; `body.rs` the robot's disc; the
+//!      [`clearance`] field (feature `clearance`); `mod.rs` the [`Map`] that joins them.
+//!    - [`metric`]: the assisting metric `d_A` (section 3.1): the [`Metric`] trait and
+//!      [`Euclidean`] (`mod.rs`), the diffusion table's reader (`table.rs`) and its binary
+//!      format (`format.rs`).
+//!    - [`clock`]: the caller's [`clock::Clock`], the deadlines of `t_exp`, `t_root`, `t_goal`
+//!      and a fake/virtual clock; `clock/meter.rs`: the work each call charges, the work cap and the
+//!      paced readings ([`clock::Meter`]); `cortex` (feature `cortex-m`): SysTick and DWT.
+//! 2. What the planner keeps:
+//!    - [`tree`]: the fixed-capacity arena with cached, blocked-aware costs (`Cost`,
+//!      `UpdateEdge`, `SetRoot`); [`index`]: the bucket index behind `Nearest` and `Nearby`.
+//!    - `store`: one tree's storage (arena, index and the rewiring sweeps' state), two of which
+//!      make a [`Storage`]; `sweep`: the sweeps' bounded queue and stack.
+//! 3. What one call does ([`planner`], paper Algorithm 1):
+//!    - `planner/step.rs`: the call's loop, expansion and rewiring sharing `t_exp`;
+//!      `planner/follow.rs`: the root follows the agent, the waypoint rule and the
+//!      [`Progress`] returned; `planner/meet.rs`: meet and graft of the two trees;
+//!      `planner/updates.rs`: obstacles and live cells changed between calls.
+//!    - `sample`: every way a state is drawn (uniform, informed ellipse, goal, goal line).
+//!    - `expand`: Algorithm 2 (sample, nearest, steer, admit by the density rule, parent,
+//!      insert) and, in `expand/admit.rs`, what a full arena does.
+//!    - `rewire`: Algorithms 3-6 (`root.rs`, `goal.rs`), RT-RRT*'s random rewiring
+//!      (`random.rs`) and the tuned path shortcuts (`shortcuts.rs`).
+//!    - [`motion`]: the waypoint rule against moving obstacles (beyond the paper).
+//! 4. Around it: [`agent`], the papers' benchmark protocol (one leg from start to goal);
+//!    [`builtin`], the built-in scenarios in flash; [`error`], the small error enums; `slots`,
+//!    panic-free array access.
 //!
 //! ## Example
 //!
@@ -76,6 +97,8 @@
 //!   counter (Cortex-M3 and up).
 //! - `embassy-time`: `clock::EmbassyClock`, a [`clock::Clock`] on `embassy_time::Instant`
 //!   for firmware built on Embassy (the application provides the time driver).
+//! - `rand-core-06`: `Rng06`, a `rand_core` 0.6 generator (a HAL's hardware RNG) as the
+//!   planner's `rand_core` 0.10 `Rng`.
 //! - `clearance`: the clearance preference ([`clearance`], `Config::clearance_weight`): paths
 //!   keep off walls where the space allows. Off by default (3.2 KB of flash when on).
 //!
@@ -122,6 +145,7 @@ pub mod config;
 #[cfg(feature = "cortex-m")]
 pub mod cortex;
 pub mod error;
+mod expand;
 pub mod geometry;
 pub mod index;
 pub mod map;
@@ -129,10 +153,10 @@ pub mod metric;
 pub mod motion;
 pub mod planner;
 mod rewire;
-pub mod sample;
-pub mod search;
+mod sample;
 mod slots;
-pub mod sweep;
+mod store;
+mod sweep;
 pub mod tree;
 
 pub use config::{AsPrinted, Base, Config, MetricKind, Motion, Profile, RewireMode};
@@ -140,6 +164,8 @@ pub use geometry::Point;
 pub use map::{Circle, Map, Moving, OccupancyGrid};
 pub use metric::{DiffusionTable, Euclidean, Metric};
 pub use planner::{PathInfo, Planner, Progress, Stats, Status, Storage, Wait};
+#[cfg(feature = "rand-core-06")]
+pub use sample::Rng06;
 
 /// The README's example is compiled and run by `cargo test --doc`.
 #[cfg(doctest)]

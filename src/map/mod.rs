@@ -137,7 +137,7 @@ impl<'a, const K: usize> Map<'a, K> {
     }
 
     /// This world with a clearance field (a byte per cell, row-major: written by
-    /// [`crate::clearance::clearance_field`] into RAM, or baked into flash), which a
+    /// [`crate::map::clearance::clearance_field`] into RAM, or baked into flash), which a
     /// configuration's [`crate::Config::clearance_weight`] turns into a preference for paths
     /// away from walls. Errors when `field` holds fewer bytes than the grid has cells.
     pub fn with_clearance(mut self, field: &'a [u8]) -> Result<Self, MapError> {
@@ -152,10 +152,10 @@ impl<'a, const K: usize> Map<'a, K> {
     }
 
     /// The clearance class (0-7) of segment `a-b` and the work it took
-    /// ([`crate::clearance::class_of`]); `(0, 0)` without a clearance field.
+    /// ([`crate::map::clearance::class_of`]); `(0, 0)` without a clearance field.
     pub fn clearance_class(&self, a: Point, b: Point) -> (u8, u32) {
         match self.clearance {
-            Some(f) => crate::clearance::class_of(&self.grid, f, a, b),
+            Some(f) => crate::map::clearance::class_of(&self.grid, f, a, b),
             None => (0, 0),
         }
     }

@@ -86,7 +86,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
         // The agent stands on a node: that node becomes the root.
         if let Some((q, d2)) = self.fwd.index.nearest(agent, self.fwd.tree.positions())
-            && d2 < crate::search::duplicate_sq(self.map.grid().cell_size())
+            && d2 < crate::expand::duplicate_sq(self.map.grid().cell_size())
             && self.fwd.tree.set_root(q).is_ok()
         {
             meter.charge(units(N / 8));

@@ -94,12 +94,12 @@ use rand_core::Rng;
 use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config, RewireMode};
 use crate::error::{InputError, ObstacleError, SetupError, TreeError};
+use crate::expand::{Env, Near, Target, TreeStore};
 use crate::geometry::Point;
 use crate::map::{Circle, Map, Moving, ObstacleId};
 use crate::metric::Metric;
 use crate::motion::{Choice, choose};
 use crate::rewire::Slice;
-use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sat_u32, sort_small_by, units};
 use crate::tree::{Cost, Edge, NodeId, Tree};
 
@@ -253,8 +253,8 @@ pub struct Stats {
     /// Times no tree node could reach the agent and the forward tree restarted from it.
     pub restarted: u32,
     /// States let in by the starving rule (a search whose density rule had turned away
-    /// [`crate::search::STARVING`] states in a row admits a state no node is near; module
-    /// `search`), both trees (0 in 600 first-leg searches on the paper's maps).
+    /// 1,024 states in a row admits a state no node is near: the expansion's starving rule),
+    /// both trees (0 in 600 first-leg searches on the paper's maps).
     pub starving_admits: u32,
 }
 
@@ -304,7 +304,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let (w, h) = (map.grid().width_m(), map.grid().height_m());
         // Squared distances must neither overflow across the map nor underflow at the
         // duplicate scale (1e-4 cell): cells from about 1e-15 m, maps up to about 1e19 m.
-        let dup_sq = crate::search::duplicate_sq(map.grid().cell_size());
+        let dup_sq = crate::expand::duplicate_sq(map.grid().cell_size());
         if !(w * w + h * h).is_finite() || dup_sq < f32::MIN_POSITIVE {
             return Err(SetupError::Map);
         }

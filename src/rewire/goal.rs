@@ -67,7 +67,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             let d1 = env.metric_to(x1_pos, &to_goal, meter);
             self.nearby(x1_pos, radius, &mut near, meter);
             // Decreasing d_A(., goal): the neighbour nearest the goal ends on top of the stack.
-            let mut keyed: heapless::Vec<(f32, NodeId), { crate::search::NEAR_CAP }> =
+            let mut keyed: heapless::Vec<(f32, NodeId), { crate::expand::NEAR_CAP }> =
                 heapless::Vec::new();
             // A visit is up to 64 metric readings and 128 tests (a millisecond on a Cortex-M4F,
             // issue 25): past the deadline the rest are skipped; a neighbour left out stays

@@ -70,9 +70,9 @@ mod root;
 mod shortcuts;
 
 use crate::clock::{Clock, Deadline, Meter};
+use crate::expand::{Env, Near, Target, TreeStore};
 use crate::geometry::{Ellipse, Point};
 use crate::metric::Metric;
-use crate::search::{Env, Near, Target, TreeStore};
 use crate::slots::{sort_small_by, units};
 use crate::tree::{Edge, Mark, NodeId};
 
