@@ -12,7 +12,7 @@
 //!   reads 0: the clock never advances, and the planner's work cap still ends every call).
 //!
 //! Both read the counter directly, so reading costs a few instructions; both ignore
-//! [`Clock::charge`](crate::clock::Clock::charge) (real time, not work).
+//! [`Clock::charge`] (real time, not work).
 //!
 //! ```ignore
 //! use cortex_m_rt::exception;
