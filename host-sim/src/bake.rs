@@ -455,7 +455,7 @@ pub fn export_flash(
         pt(sc.start),
         goals.len(),
         goals.join(", "),
-        sc.sigma,
+        sc.sigma(),
         sc.robot_radius,
         static_array("GRID", &sc.map.bits),
         static_array("SPACE", space),

@@ -30,13 +30,35 @@ use crate::sim::{BUCKETS, Prepared, SizedPlanner, with_planner_in};
 use crate::stats::median;
 use bi_am_rrt::Storage;
 
-/// A named planner configuration of the bench.
+/// A planner as a command names it: a Table 1 name and the fields set by hand.
 #[derive(Clone, Debug)]
 pub struct Variant {
     /// The name in the output.
     pub name: String,
-    /// The configuration.
+    /// The named configuration with the overrides applied as written (lengths not fitted to
+    /// any map): its name, metric and switches; a run's configuration is
+    /// [`Variant::config_for`].
     pub cfg: Config,
+    /// The named configuration, before the overrides.
+    pub named: Config,
+    /// The overrides (`field`, `value`), in the order written.
+    pub overrides: Vec<(String, String)>,
+}
+
+impl Variant {
+    /// The configuration a run on `prep` gets, in three explicit steps: the named
+    /// configuration, its lengths fitted to the map ([`Prepared::config`]: Table 2's with
+    /// `paper_lengths`, and the scenario's `sigma`), then the overrides as written (a length
+    /// set by hand is that many metres, whatever the named value).
+    pub fn config_for(&self, prep: &Prepared) -> Result<Config> {
+        let mut cfg = prep.config(self.named);
+        for (k, v) in &self.overrides {
+            apply(&mut cfg, k, v)?;
+        }
+        cfg.validate()
+            .map_err(|e| anyhow!("{} on {}: {e}", self.name, prep.scenario.name))?;
+        Ok(cfg)
+    }
 }
 
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
@@ -51,15 +73,18 @@ pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
         .map(|item| {
             let mut parts = item.trim().split('@');
             let name = parts.next().unwrap_or_default();
-            let mut cfg = crate::experiment::parse_planners(name)?
+            let named = crate::experiment::parse_planners(name)?
                 .into_iter()
                 .next()
                 .ok_or_else(|| anyhow!("empty planner name"))?;
+            let mut cfg = named;
+            let mut overrides = Vec::new();
             for o in parts {
                 let (k, v) = o
                     .split_once('=')
                     .ok_or_else(|| anyhow!("override {o:?}: write field=value"))?;
                 apply(&mut cfg, k.trim(), v.trim()).with_context(|| format!("override {o:?}"))?;
+                overrides.push((k.trim().to_string(), v.trim().to_string()));
             }
             cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
             let label = item.trim().split_once('@').map(|x| x.1);
@@ -69,6 +94,8 @@ pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
                     None => cfg.name().to_string(),
                 },
                 cfg,
+                named,
+                overrides,
             })
         })
         .collect()
@@ -295,9 +322,14 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         {
             prep.diffusion()?;
         }
-        for v in &args.variants {
+        let fitted = args
+            .variants
+            .iter()
+            .map(|v| v.config_for(&prep))
+            .collect::<Result<Vec<Config>>>()?;
+        for cfg in &fitted {
             let last = args.budgets.last().copied().unwrap_or(0.0);
-            prep.warn_narrow_legs(v.cfg, &|k| {
+            prep.warn_narrow_legs(*cfg, &|k| {
                 (args.legs.is_empty() || args.legs.contains(&(k + 1)))
                     .then(|| format!("within {last} s"))
             });
@@ -333,12 +365,12 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
             }
             // Variant by variant, each block after an unrecorded warm-up run (seed 0, first
             // budget): see the module docs.
-            for v in &args.variants {
+            for (v, &cfg) in args.variants.iter().zip(&fitted) {
                 for seed in 0..=args.seeds {
                     let run = Run {
                         clock: args.clock,
                         prep: &prep,
-                        v,
+                        cfg,
                         seed,
                         start,
                         goal,
@@ -639,7 +671,8 @@ struct Arenas {
 struct Run<'a> {
     clock: BenchClock,
     prep: &'a Prepared,
-    v: &'a Variant,
+    /// The variant's configuration on this scenario ([`Variant::config_for`]).
+    cfg: Config,
     seed: u64,
     start: bi_am_rrt::Point,
     goal: bi_am_rrt::Point,
@@ -657,7 +690,7 @@ impl Run<'_> {
         storage: &mut Option<Box<Storage<N, BUCKETS>>>,
     ) -> Result<Measured> {
         let storage = storage.get_or_insert_with(Box::default);
-        with_planner_in::<N, _>(storage, self.prep, self.v.cfg, self.seed, self.start, |p| {
+        with_planner_in::<N, _>(storage, self.prep, self.cfg, self.seed, self.start, |p| {
             if self.cold {
                 flush_caches();
             }

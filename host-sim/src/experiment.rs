@@ -239,7 +239,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
             d.on_call(p, agent, leg_start, now_s);
         }
     };
-    let (runs, final_nodes) = with_planner(prep, cfg, seed, |p| {
+    let (runs, final_nodes) = with_planner(prep, prep.config(cfg), seed, |p| {
         let runs = match args.clock {
             ClockKind::Wall => {
                 let clock = WallClock::new();
@@ -271,7 +271,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
     let anytime = if args.anytime_ms > 0 {
         let mut c = cfg;
         c.budget.t_exp = Duration::from_millis(args.anytime_ms);
-        with_planner(prep, c, seed, |p| {
+        with_planner(prep, prep.config(c), seed, |p| {
             p.set_goal(prep.scenario.goals[0])
                 .map_err(|e| anyhow!("{e}"))?;
             let progress = match args.clock {
@@ -543,7 +543,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     // Legs through long narrow corridors, said before the runs (issue 42).
     for prep in &preps {
         for cfg in &planners {
-            prep.warn_narrow_legs(*cfg, &|k| {
+            prep.warn_narrow_legs(prep.config(*cfg), &|k| {
                 Some(format!(
                     "within the leg's {} calls",
                     prep.leg_calls(k, &Default::default())

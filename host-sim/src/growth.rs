@@ -33,7 +33,7 @@ pub fn calibrate(repeats: u32) -> Result<()> {
                     max_calls: 20,
                     ..Protocol::default()
                 };
-                with_planner(prep, cfg, seed, |p| {
+                with_planner(prep, prep.config(cfg), seed, |p| {
                     drive(p, prep, &clock, &[0], &protocol, |_, _, _, _| {}).map(|_| ())
                 })?;
                 let ns = (clock.now() - t0) as f64;
@@ -88,7 +88,7 @@ pub fn growth(
                 let mut cfg = *base;
                 cfg.rewiring.mode = rewire;
                 cfg.budget.t_exp = Duration::from_millis(call_ms);
-                with_planner(&prep, cfg, seed, |p| {
+                with_planner(&prep, prep.config(cfg), seed, |p| {
                     p.set_goal(sc.goals[0])
                         .map_err(|e| anyhow::anyhow!("{e}"))?;
                     let clock = WallClock::new();

@@ -930,14 +930,13 @@ fn main() -> Result<()> {
                 bail!("--minutes, --goal-every and --speed must be positive");
             }
             let mut scs = body.apply_all(maps::load_scenarios(&scenarios, Some(&[scenario]))?)?;
-            let cfg = host_sim::bench::parse_variants(&planner)?
+            let variant = host_sim::bench::parse_variants(&planner)?
                 .into_iter()
                 .next()
-                .context("no planner")?
-                .cfg;
+                .context("no planner")?;
             host_sim::soak::run(&host_sim::soak::SoakArgs {
                 scenario: scs.remove(0),
-                cfg,
+                variant,
                 seconds: minutes * 60.0,
                 goal_every,
                 speed,

@@ -280,9 +280,10 @@ pub struct Scenario {
     pub start: Point,
     /// Goals in order.
     pub goals: Vec<Point>,
-    /// Connection distance of the two trees, metres (a file without `sigma_m` gets the
-    /// paper's 30 m times the map's length scale, [`bi_am_rrt::config::length_scale`]).
-    pub sigma: f32,
+    /// The connection distance of the two trees as the scenario states it, in metres (a
+    /// file's `sigma_m`, a built-in's); `None`: the paper's 30 m, fitted to the map like the
+    /// other lengths ([`Scenario::sigma`]).
+    pub sigma_m: Option<f32>,
     /// The world pose of the map's lower-left corner when positions were given in a ROS map
     /// frame (y up); `None`: metres from the top-left corner, y down.
     pub ros_origin: Option<[f64; 2]>,
@@ -429,9 +430,6 @@ pub fn scenarios_from_str(
             ),
             None => Point::new(p[0], p[1]),
         };
-        let sigma = e
-            .sigma_m
-            .unwrap_or(PAPER_SIGMA_M * bi_am_rrt::config::length_scale(wm.max(hm)));
         let sc = Scenario {
             ros_origin,
             ..Scenario::new(
@@ -440,7 +438,7 @@ pub fn scenarios_from_str(
                 e.file.display().to_string(),
                 pt(e.start),
                 e.goals.into_iter().map(pt).collect(),
-                sigma,
+                e.sigma_m,
             )
         };
         let sc = sc.with_robot_radius(e.robot_radius_m.unwrap_or(0.0))?;
@@ -463,7 +461,7 @@ impl Scenario {
         source: impl Into<String>,
         start: Point,
         goals: Vec<Point>,
-        sigma: f32,
+        sigma_m: Option<f32>,
     ) -> Self {
         Self {
             name: name.into(),
@@ -471,7 +469,7 @@ impl Scenario {
             source: source.into(),
             start,
             goals,
-            sigma,
+            sigma_m,
             ros_origin: None,
             paper_lengths: false,
             robot_radius: 0.0,
@@ -479,6 +477,24 @@ impl Scenario {
             reach: None,
             clearance: None,
         }
+    }
+
+    /// The length scale the configurations get on this scenario: the map's
+    /// ([`bi_am_rrt::config::length_scale`] of its larger side), or 1 (Table 2's metres) with
+    /// `paper_lengths`.
+    pub fn length_scale(&self) -> f32 {
+        if self.paper_lengths {
+            return 1.0;
+        }
+        let g = self.map.grid();
+        bi_am_rrt::config::length_scale(g.width_m().max(g.height_m()))
+    }
+
+    /// The connection distance `sigma` the planners get here: the scenario's own
+    /// ([`Scenario::sigma_m`]), else the paper's 30 m times [`Scenario::length_scale`].
+    pub fn sigma(&self) -> f32 {
+        self.sigma_m
+            .unwrap_or_else(|| PAPER_SIGMA_M * self.length_scale())
     }
 
     /// A position of the planner's frame (metres from the top-left corner, y down) in the
@@ -509,11 +525,10 @@ impl Scenario {
         if self.goals.is_empty() {
             bail!("scenario {name}: `goals` is empty (give at least one goal)");
         }
-        if !(self.sigma.is_finite() && self.sigma >= 0.0) {
-            bail!(
-                "scenario {name}: sigma_m = {} (must be finite and not negative)",
-                self.sigma
-            );
+        if let Some(sigma) = self.sigma_m
+            && !(sigma.is_finite() && sigma >= 0.0)
+        {
+            bail!("scenario {name}: sigma_m = {sigma} (must be finite and not negative)");
         }
         let map = self.planner_map::<0>()?;
         let body = if self.robot_radius > 0.0 {
@@ -807,7 +822,7 @@ pub fn builtin_scenario(s: &builtin::Scenario) -> Scenario {
         format!("builtin:{}", s.name),
         s.start,
         s.goals.to_vec(),
-        s.sigma,
+        Some(s.sigma),
     )
 }
 
@@ -851,7 +866,8 @@ mod tests {
             (x - 12.5).abs() < 1e-4 && (y - 11.0).abs() < 1e-4,
             "{x} {y}"
         );
-        assert!((sc.sigma - 6.0).abs() < 1e-5, "{}", sc.sigma);
+        assert_eq!(sc.sigma_m, None);
+        assert!((sc.sigma() - 6.0).abs() < 1e-5, "{}", sc.sigma());
     }
 
     use super::*;

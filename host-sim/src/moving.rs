@@ -326,7 +326,7 @@ pub const ROUTE_CALLS: u32 = 400;
 fn route(prep: &Prepared, cfg: Config, calls: u32) -> Result<Vec<Point>> {
     let goal = *prep.scenario.goals.first().context("no goal")?;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
-    with_planner(prep, cfg, 0, |p| {
+    with_planner(prep, prep.config(cfg), 0, |p| {
         p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
         for _ in 0..calls {
             p.grow(&clock);
@@ -608,7 +608,7 @@ fn one(
 ) -> Result<MovingRow> {
     let goal = prep.scenario.goals[0];
     let optimum = prep.optima().first().copied().flatten().unwrap_or(f64::NAN);
-    let mut cfg = base;
+    let mut cfg = prep.config(base);
     cfg.budget.t_exp = t_exp;
     cfg.motion = if treatment == Treatment::Static {
         Motion::NONE
@@ -734,7 +734,7 @@ fn door_one(
     t_exp: Duration,
     pictures: Option<(&Path, Option<u32>)>,
 ) -> Result<MovingRow> {
-    let mut cfg = base;
+    let mut cfg = prep.config(base);
     cfg.budget.t_exp = t_exp;
     cfg.motion = Motion::NONE;
     let shut = closed_grid(&prep.scenario.map, door);

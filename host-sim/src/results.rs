@@ -77,7 +77,7 @@ impl ScenarioId {
             bytes.extend_from_slice(&p.x.to_le_bytes());
             bytes.extend_from_slice(&p.y.to_le_bytes());
         }
-        bytes.extend_from_slice(&s.sigma.to_le_bytes());
+        bytes.extend_from_slice(&s.sigma().to_le_bytes());
         // Only when set, so the digests of earlier folders stay valid.
         if s.paper_lengths {
             bytes.extend_from_slice(b"paper lengths");

@@ -163,22 +163,10 @@ fn write_result(
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
     // A Table 1 name, optionally with the bench's `@field=value` overrides.
-    let mut cfg = crate::bench::parse_variants(&args.planner)?
-        .first()
-        .map(|v| v.cfg)
+    let variant = crate::bench::parse_variants(&args.planner)?
+        .into_iter()
+        .next()
         .context("no planner named")?;
-    if let Some(t) = args.t_exp {
-        anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");
-        cfg.budget.t_exp = t;
-    }
-    let paper = args.pace == crate::results::Pace::Paper;
-    if paper {
-        anyhow::ensure!(
-            args.clock == ClockKind::Virtual,
-            "--pace paper needs --clock virtual (every call lasts its full t_exp)"
-        );
-        crate::experiment::paper_pace(&mut cfg);
-    }
     if let Some(r) = args.obstacle {
         let size = args.scenario.map.grid();
         let most = 0.25 * size.width_m().min(size.height_m());
@@ -193,6 +181,20 @@ pub fn run(args: &RunArgs) -> Result<()> {
     } else {
         prep
     };
+    // Named -> fitted to the map -> the overrides; then the run's own budget and pace.
+    let mut cfg = variant.config_for(&prep)?;
+    if let Some(t) = args.t_exp {
+        anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");
+        cfg.budget.t_exp = t;
+    }
+    let paper = args.pace == crate::results::Pace::Paper;
+    if paper {
+        anyhow::ensure!(
+            args.clock == ClockKind::Virtual,
+            "--pace paper needs --clock virtual (every call lasts its full t_exp)"
+        );
+        crate::experiment::paper_pace(&mut cfg);
+    }
     std::fs::create_dir_all(&args.out)?;
     let goals: Vec<usize> = if args.all_goals {
         (0..prep.scenario.goals.len()).collect()
@@ -438,7 +440,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         "{} on {} ({}), seed {}, {:?} clock",
         args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock
     );
-    let used = prep.config(cfg);
+    let used = cfg;
     println!(
         "  lengths {} (scale {:.3}): e_max {:.3} m, e_search {:.3} m, root step {:.3} m, sigma {:.3} m",
         if prep.scenario.paper_lengths {

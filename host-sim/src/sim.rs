@@ -145,10 +145,10 @@ impl Prepared {
     }
 
     /// Prints [`narrow_warning`] to stderr for each of [`Prepared::narrow_legs`] with `cfg`'s
-    /// lengths on this scenario; `budget(k)` says what the planner has for leg `k` (`None`:
+    /// lengths (the configuration a run gets here, fitted: [`Prepared::config`]); `budget(k)` says what the planner has for leg `k` (`None`:
     /// the leg is not run).
     pub fn warn_narrow_legs(&self, cfg: Config, budget: &dyn Fn(usize) -> Option<String>) {
-        let e_max = self.config(cfg).search.e_max;
+        let e_max = cfg.search.e_max;
         let legs = self.narrow_legs(e_max);
         if legs.is_empty() {
             return;
@@ -232,43 +232,33 @@ impl Prepared {
         })
     }
 
-    /// The configuration for this scenario: the named planner with its lengths fitted to the
-    /// map ([`Config::for_map`]; Table 2's metres with `paper_lengths`) and the scenario's
-    /// `sigma`. A length set by hand (`@e_max=8`, a value other than the named planner's) is
-    /// taken as written, in metres.
-    pub fn config(&self, base: Config) -> Config {
-        let mut c = base;
+    /// A named configuration fitted to this scenario, the second of the three steps a run's
+    /// configuration takes (named -> fitted -> the user's overrides,
+    /// [`crate::bench::Variant::config_for`]): `e_max`, `e_search` and `root_step` follow the
+    /// map ([`Config::for_grid`]), or stay Table 2's metres with `paper_lengths`, and `sigma`
+    /// is the scenario's ([`crate::maps::Scenario::sigma`]). Every length is replaced: pass the
+    /// named configuration, and set lengths by hand after this step.
+    pub fn config(&self, named: Config) -> Config {
+        let mut c = named;
         if !self.scenario.paper_lengths {
-            let named = Config::from_name(&base.name().to_string()).unwrap_or(base);
             let fitted = named.for_grid(&self.scenario.map.grid());
-            let fit =
-                |mine: f32, named: f32, fitted: f32| if mine == named { fitted } else { mine };
-            c.search.e_max = fit(c.search.e_max, named.search.e_max, fitted.search.e_max);
-            c.search.e_search = fit(
-                c.search.e_search,
-                named.search.e_search,
-                fitted.search.e_search,
-            );
-            c.rewiring.root_step = fit(
-                c.rewiring.root_step,
-                named.rewiring.root_step,
-                fitted.rewiring.root_step,
-            );
+            c.search.e_max = fitted.search.e_max;
+            c.search.e_search = fitted.search.e_search;
+            c.rewiring.root_step = fitted.rewiring.root_step;
         }
-        c.with_sigma(self.scenario.sigma)
+        c.with_sigma(self.scenario.sigma())
     }
 
     /// The length scale the configurations get on this scenario (1: Table 2's metres).
     pub fn length_scale(&self) -> f32 {
-        if self.scenario.paper_lengths {
-            return 1.0;
-        }
-        let g = self.scenario.map.grid();
-        bi_am_rrt::config::length_scale(g.width_m().max(g.height_m()))
+        self.scenario.length_scale()
     }
 }
 
-/// Builds a planner for `prep` and hands it to `f`.
+/// Builds a planner for `prep` and hands it to `f`. `cfg` is what the planner gets, as it is
+/// (the robot's radius and clearance weight come from the scenario): fit a named
+/// configuration to the map first ([`Prepared::config`], or [`crate::bench::Variant::config_for`]
+/// with overrides).
 pub fn with_planner<T>(
     prep: &Prepared,
     cfg: Config,
@@ -317,7 +307,7 @@ fn planner_on<'s, 'm, const N: usize>(
     prep.scenario.validate()?;
     let metric = prep.metric(cfg.metric)?;
     let rng = XorShiftRng::seed_from_u64(seed);
-    let mut cfg = prep.config(cfg);
+    let mut cfg = cfg;
     cfg.robot_radius = prep.scenario.robot_radius;
     cfg.clearance_weight = prep.scenario.clearance_weight();
     Planner::new(storage, map, metric, rng, cfg, start)

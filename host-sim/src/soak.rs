@@ -13,12 +13,13 @@ use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
+use bi_am_rrt::Point;
 use bi_am_rrt::clock::Clock;
-use bi_am_rrt::{Config, Point};
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 use serde::Serialize;
 
+use crate::bench::Variant;
 use crate::clock::CpuClock;
 use crate::maps::Scenario;
 use crate::optimum::Corners;
@@ -29,8 +30,8 @@ use crate::stats::median;
 pub struct SoakArgs {
     /// The scenario (its map; the start is the agent's first position).
     pub scenario: Scenario,
-    /// The planner.
-    pub cfg: Config,
+    /// The planner (fitted to the scenario, then its overrides: [`Variant::config_for`]).
+    pub variant: Variant,
     /// CPU seconds of the whole soak.
     pub seconds: f64,
     /// CPU seconds between two goals.
@@ -80,7 +81,8 @@ fn run_n<const N: usize>(args: &SoakArgs) -> Result<Vec<SoakRow>> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let prep = Prepared::with_table(args.scenario.clone(), args.table);
     let corners = Corners::of(&prep.scenario.reach_grid());
-    with_planner_at::<N, _>(&prep, args.cfg, args.seed, prep.scenario.start, |planner| {
+    let cfg = args.variant.config_for(&prep)?;
+    with_planner_at::<N, _>(&prep, cfg, args.seed, prep.scenario.start, |planner| {
         drive(planner, args, &corners)
     })
 }

@@ -158,7 +158,7 @@ fn free_point(p: &crate::sim::SimPlanner<'_, '_>, rng: &mut XorShiftRng) -> Opti
 }
 
 fn one(prep: &Prepared, base: Config, seed: u64, args: &StressArgs) -> Result<StressRun> {
-    let mut cfg = base;
+    let mut cfg = prep.config(base);
     cfg.budget.t_exp = args.t_exp;
     let mut row = row_for(prep, base, seed, String::new());
     with_planner(prep, cfg, seed, |p| {

@@ -245,7 +245,7 @@ fn scenario(
         "test",
         Point::new(start.0, start.1),
         goals.iter().map(|&(x, y)| Point::new(x, y)).collect(),
-        30.0,
+        Some(30.0),
     )
 }
 
@@ -407,7 +407,7 @@ fn every_class_of_map_reaches_its_goals_or_names_them_first() {
         println!("{}: legs named first: {named:?}", prep.scenario.name);
         let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
         let cpu = std::time::Instant::now();
-        let runs = with_planner(&prep, cfg, 1, |p| {
+        let runs = with_planner(&prep, prep.config(cfg), 1, |p| {
             drive(
                 p,
                 &prep,
@@ -468,7 +468,7 @@ fn regression_a_start_outside_the_largest_component_reaches_its_goal() {
     let mut cfg = bi_am_rrt::Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
     cfg.budget.t_exp = std::time::Duration::from_millis(5);
     let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
-    let runs = with_planner(&prep, cfg, 1, |p| {
+    let runs = with_planner(&prep, prep.config(cfg), 1, |p| {
         drive(
             p,
             &prep,

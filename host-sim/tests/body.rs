@@ -24,7 +24,7 @@ fn hall(door: f32) -> Scenario {
         "test",
         Point::new(3.0, 5.0),
         vec![Point::new(17.0, 5.0), Point::new(4.0, 8.0)],
-        6.0,
+        Some(6.0),
     )
 }
 
@@ -204,7 +204,7 @@ fn regression_maze512_no_collisions() {
         .into_par_iter()
         .flat_map_iter(|seed| {
             let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
-            let runs = host_sim::sim::with_planner(&prep, cfg, seed, |p| {
+            let runs = host_sim::sim::with_planner(&prep, prep.config(cfg), seed, |p| {
                 host_sim::sim::drive(
                     p,
                     &prep,

@@ -1103,7 +1103,7 @@ fn a_short_soak_changes_goals_and_stays_safe() {
     let dir = tempfile::tempdir().unwrap();
     let rows = host_sim::soak::run(&host_sim::soak::SoakArgs {
         scenario: maps::builtin_by_name("maze").unwrap(),
-        cfg: bi_am_rrt::Config::bi_am_rrt(bi_am_rrt::MetricKind::Euclidean).tuned(),
+        variant: host_sim::bench::parse_variants("Bi-AM-RRT*(E) tuned").unwrap()[0].clone(),
         seconds: 1.0,
         goal_every: 0.25,
         speed: 0.7,
@@ -1319,7 +1319,7 @@ fn run_lengths_follow_the_map() {
         let office = Prepared::new(maps::builtin_by_name("office_200").unwrap());
         assert_eq!(
             office.config(named),
-            named.with_sigma(office.scenario.sigma)
+            named.with_sigma(office.scenario.sigma())
         );
         // The small maze: 60 m, scale 0.6; 5 m x 0.6 = 3 m, kept at 4 cells (4 m).
         let mut sc = maps::builtin_by_name("maze").unwrap();
@@ -1334,15 +1334,63 @@ fn run_lengths_follow_the_map() {
             );
         }
         assert!((maze.length_scale() - 0.6).abs() < 1e-6);
-        assert_eq!(c.search.sigma, sc.sigma, "the scenario's sigma is kept");
-        let mut hand = named;
-        hand.search.e_max = 8.0;
-        assert_eq!(maze.config(hand).search.e_max, 8.0, "a length set by hand");
+        assert_eq!(c.search.sigma, sc.sigma(), "the scenario's sigma is kept");
+        let spec = if tuned {
+            "Bi-AM-RRT*(D) tuned"
+        } else {
+            "Bi-AM-RRT*(D)"
+        };
+        let hand = host_sim::bench::parse_variants(&format!("{spec}@e_max=8")).unwrap();
+        let c = hand[0].config_for(&maze).unwrap();
+        assert_eq!(c.search.e_max, 8.0, "a length set by hand");
         sc.paper_lengths = true;
         let maze = Prepared::new(sc);
         assert_eq!(maze.config(named).search.e_max, named.search.e_max);
         assert_eq!(maze.length_scale(), 1.0);
     }
+}
+
+/// Issue 43, "lengths decided by a guess": a scenario file without `sigma_m` got its `sigma`
+/// fitted to the map when it was read, before `--paper-lengths` was, so a 40 m map with the
+/// paper's lengths ran Table 2's `e_max` (5 m) with a `sigma` of 12 m, not 30; a length set by
+/// hand to the named planner's own value (`@e_max=5`) was taken for "not set" and fitted (to
+/// 4 m); and `@sigma=...` was dropped for the scenario's. Lengths now go named -> fitted to the
+/// map (or Table 2's with `paper_lengths`) -> the overrides, as written.
+#[test]
+fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_written() {
+    use host_sim::sim::Prepared;
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbImage::from_pixel(40, 40, image::Rgb([255, 255, 255]));
+    img.save(dir.path().join("open40.png")).unwrap();
+    std::fs::write(
+        dir.path().join("s.toml"),
+        "[open40]\nfile = \"open40.png\"\nsize_m = [40, 40]\nstart = [2.5, 2.5]\n\
+         goals = [[37.5, 37.5]]\n",
+    )
+    .unwrap();
+    let load = || maps::load_scenarios(&dir.path().join("s.toml"), None).unwrap()[0].clone();
+    let spec = "Bi-AM-RRT*(D)";
+    let named = host_sim::bench::parse_variants(spec).unwrap()[0].clone();
+    // Fitted to the 40 m map (scale 0.4): e_max 5 m -> 2 m, kept at 4 cells (4 m); sigma 12 m.
+    let fitted = Prepared::new(load());
+    let c = named.config_for(&fitted).unwrap();
+    assert_eq!(c.search.e_max, 4.0);
+    assert!((c.search.sigma - 12.0).abs() < 1e-4, "{}", c.search.sigma);
+    // The paper's lengths: Table 2's e_max and sigma, both.
+    let mut sc = load();
+    sc.paper_lengths = true;
+    let paper = Prepared::new(sc);
+    let c = named.config_for(&paper).unwrap();
+    assert_eq!(c.search.e_max, 5.0);
+    assert_eq!(
+        c.search.sigma, 30.0,
+        "Table 2's sigma with the paper's lengths"
+    );
+    // Overrides as written, whatever the named value.
+    let hand = host_sim::bench::parse_variants("Bi-AM-RRT*(D)@e_max=5@sigma=7").unwrap()[0].clone();
+    let c = hand.config_for(&fitted).unwrap();
+    assert_eq!(c.search.e_max, 5.0, "@e_max=5 is 5 m, not the fitted 4 m");
+    assert_eq!(c.search.sigma, 7.0, "@sigma=7 is kept");
 }
 
 /// Issue 26: `bench`'s per-leg ratios are the median of ours / theirs over the legs both ran,

@@ -20,6 +20,6 @@ pub fn two_doors() -> Scenario {
         "test",
         Point::new(5.5, 7.5),
         vec![Point::new(34.5, 7.5)],
-        18.0,
+        Some(18.0),
     )
 }
