@@ -9,7 +9,7 @@
 //!    `examples/twin.rs` on the host, bit for bit (CI compares them).
 //! 2. **Office, in real time**: Bi-AM-RRT*(D) from the office scenario's start to its goal 1
 //!    (or the start and goal 1 of whichever scenario was exported last, a nav2 map say; with
-//!    `BIAMRRT_GOALS=all` at build time through all its goals in turn, `scripts/firmware-sequence.sh`),
+//!    `BIAMRRT_GOALS=all` at build time through all its goals in turn, `firmware/sequence.sh`),
 //!    with the occupancy grid and the diffusion table in flash (exported by
 //!    `host-sim export`), `t_exp` = 150 ms measured on SysTick
 //!    ([`bi_am_rrt::cortex::SysTickClock`], 168 MHz core clock), and the agent moving as in the

@@ -119,7 +119,7 @@
 #![warn(missing_docs)]
 // No reachable panic (promise 2): the non-test code may not index, unwrap, panic, overflow an
 // integer or truncate in a cast. Local `allow`s carry a one-line reason; the panic-never build
-// (`tests/panic-never`) checks the result at link time.
+// (`firmware/panic-never`) checks the result at link time.
 #![cfg_attr(
     not(test),
     deny(

@@ -1,9 +1,9 @@
 //! The exported scenario's mission in real time, shared by the firmware example
-//! (`examples/firmware.rs`, Cortex-M4F) and the Cortex-M0+ build (`tests/m0-twin`): the
+//! (`examples/firmware.rs`, Cortex-M4F) and the Cortex-M0+ build (`firmware/m0-twin`): the
 //! planner flies the scenario's goal 1 (or with `BIAMRRT_GOALS=all` at build time all its
 //! goals in turn) on the clock it is given, and prints the per-call times, the path and its
 //! checksum. The including crate provides `scenario` (the `host-sim export` statics) and
-//! `hprintln!` at its root. Also built for RISC-V (`tests/riscv-twin`'s `office`).
+//! `hprintln!` at its root. Also built for RISC-V (`firmware/riscv-twin`'s `office`).
 //!
 //! With `BIAMRRT_WALKERS=n` at build time (1-4), `n` people pace to and fro at 1 m/s across
 //! the straight line from the start to goal 1 (6 m either side, evenly along it); before every

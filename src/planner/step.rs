@@ -41,7 +41,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// (retried after the loop; when it does not fit, the agent holds with
     /// [`Wait::OutOfTime`]). On a real clock a call therefore overruns `t_exp` by at most the
     /// rest of one short piece of an expansion step: measured on a Cortex-M4F model
-    /// (`scripts/firmware-sequence.sh`, office, all six goals, 2 x 2,048 nodes, 150 ms),
+    /// (`firmware/sequence.sh`, office, all six goals, 2 x 2,048 nodes, 150 ms),
     /// 0.67 ms (paper's set) and 0.40 ms (tuned) at worst. And whatever the clock (even
     /// one that never advances) a call does at most `max_work + W_step` units, where `W_step` is the most work between two checks:
     /// one expansion or one rewiring visit. Both are `O(N + e_max / cell)`: an expansion does

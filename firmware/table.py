@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's firmware table, from the figures `scripts/firmware-sequence.sh` wrote to
+"""The README's firmware table, from the figures `firmware/sequence.sh` wrote to
 docs/firmware-sequence*.txt (one row per target and set). Prints it; with --check, compares it
 with the README's table (between `<!-- firmware-table -->` and the next blank line) and exits 1
 when they differ; with --write, replaces it."""

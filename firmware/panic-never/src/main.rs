@@ -3,7 +3,7 @@
 //! `panic-never`'s panic handler is a symbol that does not exist. The binary therefore links
 //! only when the optimiser has removed every panicking branch reachable from these calls.
 //!
-//! Build (release, LTO): `cd tests/panic-never && cargo build --release --target
+//! Build (release, LTO): `cd firmware/panic-never && cargo build --release --target
 //! thumbv7em-none-eabihf`. It is never run.
 #![no_std]
 #![no_main]

@@ -6,7 +6,7 @@
 //! its stack high-water mark.
 //!
 //! ```sh
-//! cd tests/m0-twin && cargo run --release   # needs qemu-system-arm
+//! cd firmware/m0-twin && cargo run --release   # needs qemu-system-arm
 //! ```
 #![no_std]
 #![no_main]

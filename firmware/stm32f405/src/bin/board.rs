@@ -7,7 +7,7 @@
 //! ```sh
 //! cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
 //!     --scenario office --out target/flash
-//! cd boards/stm32f405 && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin board
+//! cd firmware/stm32f405 && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin board
 //! ```
 //!
 //! `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.

@@ -27,7 +27,7 @@
 //! instructions, never across a `plan` call.
 //!
 //! ```sh
-//! cd boards/stm32f405 && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin tasks
+//! cd firmware/stm32f405 && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin tasks
 //! ```
 #![no_std]
 #![no_main]

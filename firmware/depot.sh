@@ -4,7 +4,7 @@
 # model: 8 ns an instruction, so the figures are deterministic), with the paper's set and
 # with the tuned one. About 40 s of QEMU per set.
 #
-#   scripts/firmware-depot.sh [--check]
+#   firmware/depot.sh [--check]
 #
 # Fails when a goal is missed, a collision or a panic happens, a call overruns t_exp by more
 # than 1 ms, or the firmware leaves the flash (256 KiB) or RAM (96 KiB) budget. Writes
@@ -55,7 +55,7 @@ for set in paper tuned; do
 done
 if [ "$check" = 1 ]; then
   if ! diff -u "$doc" "$out"; then
-    echo "the depot firmware's figures changed: run scripts/firmware-depot.sh and copy $doc into the README block after <!-- docs/firmware-depot.txt -->"
+    echo "the depot firmware's figures changed: run firmware/depot.sh and copy $doc into the README block after <!-- docs/firmware-depot.txt -->"
     exit 1
   fi
   awk '/^<!-- docs\/firmware-depot.txt -->$/ { on = 1; next }

@@ -4,7 +4,7 @@
 //! bit for bit (`.ci/run` compares them): promise 5 on a third instruction set.
 //!
 //! ```sh
-//! cd tests/riscv-twin && cargo run --release   # needs qemu-system-riscv32 (qemu-system-misc)
+//! cd firmware/riscv-twin && cargo run --release   # needs qemu-system-riscv32 (qemu-system-misc)
 //! ```
 #![no_std]
 #![no_main]

@@ -2,11 +2,11 @@
 //! the same code as the Cortex-M4F firmware's (`examples/shared/office.rs`): the scenario last
 //! exported to `BIAMRRT_FLASH_DIR`, `t_exp` = 150 ms on the core's `time` counter (QEMU's
 //! `virt` board: the ACLINT timer at 10 MHz). `-icount shift=3` charges 8 ns an instruction, a
-//! 125 MIPS core, as the Arm runs. `scripts/firmware-sequence.sh --riscv` runs it with both
+//! 125 MIPS core, as the Arm runs. `firmware/sequence.sh --riscv` runs it with both
 //! sets.
 //!
 //! ```sh
-//! cd tests/riscv-twin && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin office
+//! cd firmware/riscv-twin && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin office
 //! ```
 #![no_std]
 #![no_main]

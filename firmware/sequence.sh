@@ -3,13 +3,13 @@
 # with the paper's set and with the tuned one, on the SysTick clock at 168 MHz (QEMU's
 # -icount model: 8 ns an instruction). About 1-4 minutes of QEMU per set.
 #
-#   scripts/firmware-sequence.sh [--check] [--hw-sqrt | --m0 | --riscv] [--robot-radius R]
+#   firmware/sequence.sh [--check] [--hw-sqrt | --m0 | --riscv] [--robot-radius R]
 #
 # Writes docs/firmware-sequence.txt (the README quotes it); with --hw-sqrt (nightly Rust, the
 # FPU's square root: feature `hw-sqrt`) docs/firmware-sequence-hw-sqrt.txt; with --m0 the
-# Cortex-M0+ build (tests/m0-twin's `office`: soft float, SysTick at 25 MHz on QEMU's
+# Cortex-M0+ build (firmware/m0-twin's `office`: soft float, SysTick at 25 MHz on QEMU's
 # mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt; with --riscv the
-# RISC-V build (tests/riscv-twin's `office`: riscv32imac, soft float, the `time` counter at
+# RISC-V build (firmware/riscv-twin's `office`: riscv32imac, soft float, the `time` counter at
 # 10 MHz on QEMU's virt board) docs/firmware-sequence-riscv.txt. --check compares instead of
 # writing. `.ci/run` runs all four with FIRMWARE_SEQUENCE=1. With --robot-radius R (metres) the
 # office is exported for a robot of that radius (issue 41: its inflated grid in flash beside
@@ -44,11 +44,11 @@ if [ "$hw" = 1 ]; then
   args+=(--features firmware-example,hw-sqrt)
   doc=docs/firmware-sequence-hw-sqrt.txt
 elif [ "$m0" = 1 ]; then
-  dir=tests/m0-twin
+  dir=firmware/m0-twin
   args=(--release --bin office)
   doc=docs/firmware-sequence-m0.txt
 elif [ "$rv" = 1 ]; then
-  dir=tests/riscv-twin
+  dir=firmware/riscv-twin
   args=(--release --bin office)
   doc=docs/firmware-sequence-riscv.txt
 else

@@ -3,10 +3,10 @@
 //! last exported to `BIAMRRT_FLASH_DIR`, `t_exp` = 150 ms on SysTick. Under QEMU's mps2-an385
 //! board (its Cortex-M3 runs ARMv6-M code unchanged) SysTick counts the board's 25 MHz clock
 //! and `-icount shift=3` charges 8 ns an instruction: a 125 MIPS core, an RP2040-class M0+ at
-//! 133 MHz. `scripts/firmware-sequence.sh --m0` runs it with both sets.
+//! 133 MHz. `firmware/sequence.sh --m0` runs it with both sets.
 //!
 //! ```sh
-//! cd tests/m0-twin && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin office
+//! cd firmware/m0-twin && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin office
 //! ```
 #![no_std]
 #![no_main]
