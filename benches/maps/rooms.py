@@ -2,7 +2,7 @@
 """Draws a small fine map of issue 23's case 2 kind in the ROS map_server format (PGM + YAML)
 and a scenario file beside it: 20 m x 20 m at 0.05 m (400 x 400 cells), the start in a 4 m room
 whose ways out are a 0.6 m and a 1 m gap, two long walls that make the way to the goal zig-zag
-(the room and the walls of tests/liveness.rs), and a second room with a 0.8 m door around goal 2.
+(the room and the walls of tests/promise_4_goals_join.rs), and a second room with a 0.8 m door around goal 2.
 Usage: rooms.py OUT_DIR   (writes rooms.pgm, rooms.yaml, scenarios.toml)
 """
 import os

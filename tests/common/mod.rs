@@ -15,6 +15,14 @@ use bi_am_rrt::map::{Circle, OccupancyGrid};
 use bi_am_rrt::metric::{ElementKind, Metric, TableHeader, write_table};
 use rand_core::Rng;
 
+pub mod checked;
+pub mod e2e;
+
+/// A virtual clock: 1 ns ticks, 30 ns per unit of work, 10 ns per reading.
+pub fn clock() -> FakeClock {
+    FakeClock::nanos().with_work_cost(30).with_step(10)
+}
+
 /// Free cells of the largest 8-connected component (no corner cutting), as a cell mask.
 pub fn main_component(g: &OccupancyGrid<'_>) -> Vec<bool> {
     let (w, h) = (g.cols() as usize, g.rows() as usize);
