@@ -89,6 +89,18 @@ pub const STARVING: u16 = 1024;
 /// other work averages 1.7 us.
 const GAP_DRAW_UNITS: u32 = 12;
 
+/// AM-RRT*(E)'s steering towards an obstacle stops this fraction of `e_max` short of it (and
+/// adds nothing when the free prefix is shorter than that).
+const STEP_BACK: f32 = 0.05;
+
+/// A gap sample is a free cell with occupied cells within `e_max / GAP_WIDTH_DIV` on both
+/// sides along its row or its column (`Search::p_gap`); a map whose cells are coarser than
+/// that draws none.
+const GAP_WIDTH_DIV: f32 = 16.0;
+
+/// The most cells a gap sample looks along each way ([`GAP_WIDTH_DIV`]).
+const GAP_MAX_CELLS: u32 = 32;
+
 /// Steering candidates ranked at once (more are drawn in several batches).
 const STEER_BATCH: usize = 32;
 /// [`STEER_BATCH`] as a candidate count.
@@ -344,8 +356,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     hi = mid;
                 }
             }
-            let len = a.dist(step) * lo - 0.05 * e_max;
-            if len < 0.05 * e_max {
+            let len = a.dist(step) * lo - STEP_BACK * e_max;
+            if len < STEP_BACK * e_max {
                 return None;
             }
             let p = a.step_towards(step, len);
@@ -725,7 +737,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         meter: &Meter<'_, C>,
     ) -> Option<(Point, bool)> {
         // A map whose cells are coarse for this `e_max` has no passage that narrow: no draw.
-        let reach = sat_u32(env.cfg.search.e_max / 16.0 / env.map.grid().cell_size()).min(32);
+        let reach = sat_u32(env.cfg.search.e_max / GAP_WIDTH_DIV / env.map.grid().cell_size())
+            .min(GAP_MAX_CELLS);
         let p = env.cfg.search.p_gap;
         if reach == 0 || p <= 0.0 || unit_f32(rng) >= p {
             return None;

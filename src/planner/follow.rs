@@ -197,7 +197,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         by: Deadline,
     ) -> bool {
         let root = self.root_position();
-        if agent.dist(root) > self.cfg.search.e_max / 10.0 {
+        if agent.dist(root) > self.cfg.search.e_max / AT_ROOT_DIV {
             return false;
         }
         // With a root step (tuned), the root moves only along a path to the goal: towards

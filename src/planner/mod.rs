@@ -116,6 +116,10 @@ pub const FOLLOW_STEPS: usize = 4;
 /// Most pairs one meet test tries (the cheapest by total cost).
 const MEET_PAIRS: usize = 16;
 
+/// The agent stands at the root when it is within `e_max / AT_ROOT_DIV` of it (Algorithm 1's
+/// "the agent reached the root"): the tree then re-roots at the path's next node.
+const AT_ROOT_DIV: f32 = 10.0;
+
 /// Storage for a planner's two trees: `N` nodes and `B` index buckets each. Keep it wherever
 /// there is room (a `static`, a `Box`, the stack of a thread with a large stack); the planner
 /// borrows it.

@@ -161,7 +161,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         // the goal joins, or rewiring changes the first edge): the steps leave time for that
         // (when the budget allows, `Meter::reserving`).
         let root = self.root_position();
-        let pending = follow.is_some_and(|a| a.dist(root) <= self.cfg.search.e_max / 10.0);
+        let pending = follow.is_some_and(|a| a.dist(root) <= self.cfg.search.e_max / AT_ROOT_DIV);
         let steps = if pending {
             meter.reserving(self.reroot_nodes().saturating_mul(2), call)
         } else {

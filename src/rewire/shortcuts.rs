@@ -8,6 +8,9 @@ use super::*;
 /// edge of the farthest point seen.
 const CUT_STEPS: usize = 5;
 
+/// A corner cut's first test reaches `1 / FIRST_PROBE_DIV` of the way along the edge.
+const FIRST_PROBE_DIV: f32 = 32.0;
+
 /// The largest `d` in `(0, reach]` at which `sees(d)` holds, by bisection from `reach / 32`
 /// ([`CUT_STEPS`] more tests), for the corner cuts; `None` when the first test fails or the
 /// call's deadline passes.
@@ -17,7 +20,7 @@ fn farthest_seen<M: Metric, C: Clock + ?Sized, const K: usize>(
     reach: f32,
     mut sees: impl FnMut(f32) -> bool,
 ) -> Option<f32> {
-    let first = reach / 32.0;
+    let first = reach / FIRST_PROBE_DIV;
     if meter.expired(&env.call) || !sees(first) {
         return None;
     }
