@@ -1,0 +1,151 @@
+//! Option groups and helpers shared by the commands: the robot's body, the metric table, maps
+//! given on the command line.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use bi_am_rrt::metric::ElementKind;
+use clap::{Args, ValueEnum};
+use host_sim::diffusion::{TableLayout, TableOptions};
+use host_sim::maps;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum MetricArg {
+    Diffusion,
+    Geodesic,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum KindArg {
+    I16,
+    F32,
+}
+
+pub(crate) fn kind_of(k: KindArg) -> ElementKind {
+    match k {
+        KindArg::I16 => ElementKind::I16,
+        KindArg::F32 => ElementKind::F32,
+    }
+}
+
+/// The robot's body, shared by every command that runs a planner.
+#[derive(Args, Clone, Copy, Debug)]
+pub(crate) struct BodyArgs {
+    /// The robot's radius in metres: every path keeps the disc clear of the walls and
+    /// obstacles (default: the scenario file's `robot_radius_m`, else 0, a point).
+    #[arg(long, value_name = "METRES")]
+    robot_radius: Option<f32>,
+    /// Move a start or goal where the robot's disc has no room to the nearest position where
+    /// it has, and say how far (without it such a scenario is refused, naming that position).
+    #[arg(long)]
+    snap_to_room: bool,
+    /// Prefer paths that keep this many metres beyond the robot's body where the space
+    /// allows (a cost that rises near walls, as nav2's inflation layer: see docs/body.md;
+    /// default: none, every edge costs its length).
+    #[arg(long, value_name = "METRES")]
+    clearance_margin: Option<f32>,
+    /// How much more a metre costs at the body's edge than in open space, with
+    /// --clearance-margin.
+    #[arg(
+        long,
+        value_name = "W",
+        default_value_t = 1.0,
+        requires = "clearance_margin"
+    )]
+    clearance_weight: f32,
+}
+
+impl BodyArgs {
+    /// The scenario for the robot these flags name (unchanged without them).
+    pub(crate) fn apply(&self, sc: maps::Scenario) -> Result<maps::Scenario> {
+        let radius = self.robot_radius.unwrap_or(sc.robot_radius);
+        let sc = if self.robot_radius.is_none() && !self.snap_to_room {
+            sc
+        } else {
+            sc.with_body(radius, self.snap_to_room)?
+        };
+        match self.clearance_margin {
+            Some(m) => sc.with_clearance(m, self.clearance_weight),
+            None => Ok(sc),
+        }
+    }
+
+    pub(crate) fn apply_all(&self, scs: Vec<maps::Scenario>) -> Result<Vec<maps::Scenario>> {
+        scs.into_iter().map(|s| self.apply(s)).collect()
+    }
+}
+
+/// Refuses a clearance preference (`--clearance-margin`, or a scenario file's
+/// `clearance_margin_m`) on a command that cannot honour it, saying `why`.
+pub(crate) fn no_clearance(scs: &[maps::Scenario], why: &str) -> Result<()> {
+    match scs.iter().find(|s| s.clearance.is_some()) {
+        Some(s) => bail!(
+            "scenario {}: a clearance preference is not supported here: {why}",
+            s.name
+        ),
+        None => Ok(()),
+    }
+}
+
+/// The diffusion table options shared by `experiment`, `bake` and `export`.
+#[derive(Args)]
+pub(crate) struct TableArgs {
+    /// Diffusion table element type.
+    #[arg(long, value_enum, default_value = "i16")]
+    table_kind: KindArg,
+    /// Diffusion table: map cells per block along each axis (0: the block side that fits
+    /// --max-bytes with the smallest error).
+    #[arg(long, default_value_t = 0)]
+    coarsen: u16,
+    /// Diffusion table: size budget in bytes when --coarsen is 0 (0: 128 KiB, plus the piece
+    /// map's half byte per cell beyond 32 KiB on maps over 65,536 cells).
+    #[arg(long, default_value_t = 0)]
+    max_bytes: usize,
+    /// Diffusion bake: most memory it may use, in MiB (estimated before it starts; a larger
+    /// bake is refused with its estimate).
+    #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_MEMORY >> 20)]
+    max_memory: usize,
+    /// Diffusion bake: compute the map on every free cell (`cells`), on the table's pieces
+    /// (`pieces`), or `auto` (cells up to 65,536 free cells, pieces above).
+    #[arg(long, value_enum, default_value = "auto")]
+    basis: host_sim::diffusion::BasisChoice,
+    /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
+    /// never across a wall) or `uniform` (one entry per block, the format-1 table).
+    #[arg(long, value_enum, default_value = "pieces")]
+    layout: TableLayout,
+}
+
+impl TableArgs {
+    pub(crate) fn options(self) -> TableOptions {
+        TableOptions {
+            kind: kind_of(self.table_kind),
+            coarsen: self.coarsen,
+            max_bytes: self.max_bytes,
+            layout: self.layout,
+            max_memory: self.max_memory << 20,
+            basis: self.basis,
+            map_hash: None,
+            keep: None,
+        }
+    }
+}
+
+pub(crate) fn load_map(spec: &str, resolution: Option<f32>) -> Result<maps::OwnedGrid> {
+    let mut grid = match spec.strip_prefix("builtin:") {
+        Some(name) => maps::builtin_by_name(name)?.map,
+        None if spec.ends_with(".yaml") || spec.ends_with(".yml") => {
+            if resolution.is_some() {
+                bail!("--resolution is for PNG maps: a ROS map's YAML gives its own");
+            }
+            maps::load_ros_yaml(&PathBuf::from(spec))?.grid
+        }
+        None => maps::load_png(&PathBuf::from(spec))?,
+    };
+    if let Some(r) = resolution {
+        if !(r.is_finite() && r > 0.0) {
+            bail!("--resolution {r}: must be a positive number of metres");
+        }
+        grid.cell_bits = r.to_bits();
+    }
+    Ok(grid)
+}

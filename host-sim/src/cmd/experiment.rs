@@ -1,0 +1,172 @@
+//! `host-sim experiment`: run planners x scenarios x repeats and write runs.csv and summary.csv.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use host_sim::clock::ClockKind;
+use host_sim::experiment::{self, ExperimentArgs, Goals};
+use host_sim::maps;
+
+use crate::args::*;
+
+/// The options of `host-sim experiment` (its description is the command's, in `main.rs`).
+#[derive(Args)]
+pub struct Cmd {
+    /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
+    /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
+    /// office_200).
+    #[arg(long)]
+    scenarios: PathBuf,
+    #[command(flatten)]
+    body: BodyArgs,
+    /// Comma-separated scenario names (default: all in the file).
+    #[arg(long, value_delimiter = ',')]
+    maps: Option<Vec<String>>,
+    /// `all` or a comma-separated list of Table 1 names.
+    #[arg(long, default_value = "all")]
+    planners: String,
+    /// Runs per planner and scenario (seeds seed .. seed + repeats - 1).
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    repeats: u32,
+    /// Clock: `wall` (real time, as the paper) or `virtual` (work-driven, repeatable).
+    #[arg(long, value_enum, default_value = "wall")]
+    clock: ClockKind,
+    /// Goal 1 only, or the whole goal sequence.
+    #[arg(long, value_enum, default_value = "first")]
+    goals: Goals,
+    /// First seed (run r uses seed + r).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Parallel jobs (default: all cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Rewiring as the reference (every expansion spends its full t_root/t_goal).
+    #[arg(long)]
+    faithful: bool,
+    #[command(flatten)]
+    table: TableArgs,
+    /// Planning time per call in ms (default: the paper's 150).
+    #[arg(long)]
+    t_exp_ms: Option<u64>,
+    /// Stop each run once the goal is in the tree (search time and nodes only).
+    #[arg(long)]
+    search_only: bool,
+    /// Planning time for the "cost after 100 ms without moving" column (ms; 0: skip).
+    #[arg(long, default_value_t = 100)]
+    anytime_ms: u64,
+    /// Run only slice K of N of the matrix (1-based, e.g. 3/8; runs i with i mod N = K - 1
+    /// in the order scenario, planner, seed). Join the slices' folders with `merge`.
+    #[arg(long)]
+    shard: Option<host_sim::results::Shard>,
+    /// Continue the experiment in --out: run only what it does not hold yet (its
+    /// experiment.json must have the same settings).
+    #[arg(long, conflicts_with = "overwrite")]
+    resume: bool,
+    /// Delete the results already in --out and start again.
+    #[arg(long)]
+    overwrite: bool,
+    /// Output folder (experiment.json, runs.csv appended as runs end; runs.json,
+    /// summary.csv and summary.json when complete).
+    #[arg(long, default_value = "out/experiment")]
+    out: PathBuf,
+    /// Count the agent's 0.25 s wait from when the goal is set, as the AM-RRT* reference's
+    /// benchmark does (default: from when the goal joins the tree).
+    #[arg(long)]
+    wait_from_set: bool,
+    /// Work per call: `full` (as much as t_exp allows here) or `paper` (the paper's pace:
+    /// 20 expansions and 8 rewiring visits per phase and expansion, every call lasting
+    /// its full t_exp on the virtual clock; needs --clock virtual).
+    #[arg(long, value_enum, default_value = "full")]
+    pace: host_sim::results::Pace,
+    /// Skip each leg's exact optimum (`optimal_m` and `travelled_ratio` stay empty): on maps
+    /// with tens of thousands of obstacle corners it can take long.
+    #[arg(long)]
+    no_optimum: bool,
+    /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
+    /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
+    /// proportional to the map's size off that range; README "Lengths that follow the map").
+    #[arg(long)]
+    paper_lengths: bool,
+    /// Parts of Algorithms 4 and 6 run exactly as printed instead of this crate's reading
+    /// (src/rewire.rs): `all`, `none`, or a comma-separated list of alg4-take (Algorithm
+    /// 4 dequeues x_r2), alg6-take (Algorithm 6 pops x_r2), alg6-cost (Algorithm 6's
+    /// cost test through x_r1), alg6-clear (Algorithm 6's clearing test on Second(S)).
+    #[arg(long, default_value = "none")]
+    as_printed: String,
+    /// The paper's Meet: every pair within sigma is tested for a free segment, not only
+    /// the 16 cheapest.
+    #[arg(long)]
+    meet_all_pairs: bool,
+    /// The paper's Fig. 7: drop a disc of this radius (metres) on goal 1's planned path
+    /// once the agent has moved 2 m, 10 m ahead along the path (as `run --obstacle`);
+    /// rows record the replanning time, the replanned path's cost and the detour
+    /// against the exact optimum around the disc.
+    #[arg(long)]
+    obstacle: Option<f32>,
+}
+
+/// Runs the command.
+pub fn main(cmd: Cmd) -> Result<()> {
+    let Cmd {
+        scenarios,
+        body,
+        maps: names,
+        planners,
+        repeats,
+        clock,
+        goals,
+        seed,
+        jobs,
+        faithful,
+        table,
+        t_exp_ms,
+        search_only,
+        anytime_ms,
+        shard,
+        resume,
+        overwrite,
+        out,
+        wait_from_set,
+        pace,
+        no_optimum,
+        paper_lengths,
+        as_printed,
+        meet_all_pairs,
+        obstacle,
+    } = cmd;
+    let mut scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
+    for s in &mut scs {
+        s.paper_lengths = paper_lengths;
+    }
+    experiment::run(&ExperimentArgs {
+        wait_from_set,
+        pace,
+        no_optimum,
+        as_printed: experiment::parse_as_printed(&as_printed)?,
+        meet_all_pairs,
+        obstacle,
+        shard,
+        existing: if resume {
+            experiment::Existing::Resume
+        } else if overwrite {
+            experiment::Existing::Overwrite
+        } else {
+            experiment::Existing::Refuse
+        },
+        scenarios: scs,
+        planners: experiment::parse_planners(&planners)?,
+        repeats,
+        clock,
+        goals,
+        seed,
+        jobs,
+        faithful,
+        search_only,
+        anytime_ms,
+        table: table.options(),
+        t_exp: t_exp_ms.map(std::time::Duration::from_millis),
+        out,
+    })
+    .map(|_| ())
+}

@@ -1,0 +1,51 @@
+//! `host-sim frozen`: work per `plan` call with a clock that never advances (only the work cap ends
+//! a call): 2,048 and 8,192 nodes, both rewiring modes, on the first leg of each scenario.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use host_sim::experiment;
+use host_sim::maps;
+
+use crate::args::*;
+
+/// The options of `host-sim frozen` (its description is the command's, in `main.rs`).
+#[derive(Args)]
+pub struct Cmd {
+    /// Scenario file (e.g. ../shared/maps/scenarios.toml); the built-in maps without it.
+    #[arg(long)]
+    scenarios: Option<PathBuf>,
+    #[command(flatten)]
+    body: BodyArgs,
+    /// Scenario names in --scenarios (comma-separated; all by default).
+    #[arg(long, value_delimiter = ',')]
+    maps: Option<Vec<String>>,
+    /// Planner name (Table 1).
+    #[arg(long, default_value = "Bi-AM-RRT*(D)")]
+    planner: String,
+    /// Calls per configuration.
+    #[arg(long, default_value_t = 10)]
+    calls: u32,
+}
+
+/// Runs the command.
+pub fn main(cmd: Cmd) -> Result<()> {
+    let Cmd {
+        scenarios,
+        body,
+        maps: names,
+        planner,
+        calls,
+    } = cmd;
+    let scs = match scenarios {
+        Some(file) => maps::load_scenarios(&file, names.as_deref())?,
+        None => maps::builtin_scenarios(),
+    };
+    let scs = body.apply_all(scs)?;
+    let base = experiment::parse_planners(&planner)?
+        .first()
+        .copied()
+        .context("no planner")?;
+    host_sim::bounds::print_frozen(scs, base, calls)
+}

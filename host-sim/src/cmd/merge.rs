@@ -1,0 +1,38 @@
+//! `host-sim merge`: join results folders of one experiment (its shards, or runs done on several
+//! machines) into one: rows in canonical order, JSON and summaries.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use host_sim::experiment;
+
+/// The options of `host-sim merge` (its description is the command's, in `main.rs`).
+#[derive(Args)]
+pub struct Cmd {
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Folders to join.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+}
+
+/// Runs the command.
+pub fn main(cmd: Cmd) -> Result<()> {
+    let Cmd { out, inputs } = cmd;
+    let m = host_sim::results::merge(&inputs, &out)?;
+    experiment::print_summary(&m.summary);
+    println!(
+        "merged {} folders: {} runs{} -> {}",
+        inputs.len(),
+        m.runs,
+        if m.missing > 0 {
+            format!(", {} runs of the matrix missing", m.missing)
+        } else {
+            String::new()
+        },
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,110 @@
+//! `host-sim run`: drive an agent from start to goal on one scenario and draw the result.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+use host_sim::clock::ClockKind;
+use host_sim::maps;
+use host_sim::run::{self, RunArgs};
+
+use crate::args::*;
+
+/// The options of `host-sim run` (its description is the command's, in `main.rs`).
+#[derive(Args)]
+pub struct Cmd {
+    /// A built-in scenario: open, bug_trap, maze (small fixtures) or trap_100, maze_100,
+    /// office_200 (the paper's sizes) ...
+    #[arg(long, default_value = "bug_trap")]
+    builtin: String,
+    /// ... or a scenario from a file (with --scenario NAME).
+    #[arg(long)]
+    scenarios: Option<PathBuf>,
+    #[command(flatten)]
+    body: BodyArgs,
+    /// Scenario name in --scenarios.
+    #[arg(long)]
+    scenario: Option<String>,
+    /// Planner name as in the paper's Table 1 (any case; suffix " tuned" for the tuned
+    /// configuration; `@field=value` overrides as in `bench --planners`). The default is
+    /// the tuned planner (`Config::default()`); "Bi-AM-RRT*(D)" is the paper's.
+    #[arg(long, default_value = "Bi-AM-RRT*(D) tuned")]
+    planner: String,
+    /// Run through every goal of the scenario instead of the first only.
+    #[arg(long)]
+    all_goals: bool,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Clock: `wall` (real time, as the paper) or `virtual` (work-driven, repeatable).
+    #[arg(long, value_enum, default_value = "wall")]
+    clock: ClockKind,
+    /// Drop a disc of this radius on the planned path once the agent moves (paper Fig. 7).
+    #[arg(long)]
+    obstacle: Option<f32>,
+    /// Output directory (pictures and result.json).
+    #[arg(long, default_value = "out/run")]
+    out: PathBuf,
+    /// Planning time per call in ms (default: the paper's 150).
+    #[arg(long)]
+    t_exp_ms: Option<u64>,
+    /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
+    /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
+    /// proportional to the map's size off that range; README "Lengths that follow the map").
+    #[arg(long)]
+    paper_lengths: bool,
+    /// Work per call, as `experiment --pace` (`paper` needs --clock virtual).
+    #[arg(long, value_enum, default_value = "full")]
+    pace: host_sim::results::Pace,
+    /// Also write an animated GIF of the run (run.gif), one frame every N plan calls.
+    #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "2",
+              value_parser = clap::value_parser!(u32).range(1..))]
+    animate: Option<u32>,
+    /// Skip each leg's exact optimum (travelled / optimum stays empty). It is computed
+    /// after the drive, when every goal's result is already in result.json; on maps with
+    /// tens of thousands of obstacle corners it can take long.
+    #[arg(long)]
+    no_optimum: bool,
+}
+
+/// Runs the command.
+pub fn main(cmd: Cmd) -> Result<()> {
+    let Cmd {
+        builtin,
+        scenarios,
+        body,
+        scenario,
+        planner,
+        all_goals,
+        seed,
+        clock,
+        obstacle,
+        out,
+        animate,
+        t_exp_ms,
+        paper_lengths,
+        pace,
+        no_optimum,
+    } = cmd;
+    let sc = match (scenarios, scenario) {
+        (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
+        (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
+        (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
+        (None, None) => maps::builtin_by_name(&builtin)?,
+    };
+    let mut sc = body.apply(sc)?;
+    sc.paper_lengths = paper_lengths;
+    run::run(&RunArgs {
+        scenario: sc,
+        planner,
+        all_goals,
+        seed,
+        clock,
+        obstacle,
+        out,
+        animate,
+        t_exp: t_exp_ms.map(std::time::Duration::from_millis),
+        pace,
+        no_optimum,
+    })
+}
