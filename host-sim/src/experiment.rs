@@ -10,6 +10,8 @@
 //!   moving for that long, and the cost of its path to the goal is recorded (the paper does
 //!   not report this).
 
+use crate::planners::as_printed_names;
+use crate::sim::{paper_pace, row};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -87,68 +89,6 @@ pub struct ExperimentArgs {
     pub out: PathBuf,
 }
 
-/// `all` or a comma-separated list of Table 1 names (any case, optionally ` tuned`).
-pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
-    if spec.trim().eq_ignore_ascii_case("all") {
-        return Ok(Config::table1().to_vec());
-    }
-    spec.split(',')
-        .map(|name| {
-            let name = name.trim();
-            // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
-            let found = Config::table1()
-                .into_iter()
-                .chain(Config::table1().map(Config::tuned))
-                .find(|c| c.name().to_string().eq_ignore_ascii_case(name));
-            found.with_context(|| {
-                let all: Vec<String> = Config::table1()
-                    .iter()
-                    .map(|c| c.name().to_string())
-                    .collect();
-                format!(
-                    "unknown planner {name:?}; Table 1 names are {} (each also with the \
-                     suffix \" tuned\")",
-                    all.join(", ")
-                )
-            })
-        })
-        .collect()
-}
-
-/// `none`, `all`, or switch names of [`bi_am_rrt::AsPrinted::NAMES`] joined by `,` or `+`.
-pub fn parse_as_printed(spec: &str) -> Result<bi_am_rrt::AsPrinted> {
-    let spec = spec.trim();
-    if spec.eq_ignore_ascii_case("all") {
-        return Ok(bi_am_rrt::AsPrinted::ALL);
-    }
-    let mut out = bi_am_rrt::AsPrinted::NONE;
-    if spec.eq_ignore_ascii_case("none") || spec.is_empty() {
-        return Ok(out);
-    }
-    for name in spec.split([',', '+']) {
-        if !out.set(name.trim(), true) {
-            bail!(
-                "unknown part {name:?} of Algorithms 4 and 6; the parts are {} (or all, none)",
-                bi_am_rrt::AsPrinted::NAMES.join(", ")
-            );
-        }
-    }
-    Ok(out)
-}
-
-/// The names of the switches that are on, in [`bi_am_rrt::AsPrinted::NAMES`]'s order.
-pub fn as_printed_names(p: bi_am_rrt::AsPrinted) -> Vec<String> {
-    bi_am_rrt::AsPrinted::NAMES
-        .iter()
-        .filter(|n| {
-            let mut q = p;
-            q.set(n, false);
-            q != p
-        })
-        .map(|n| n.to_string())
-        .collect()
-}
-
 /// The planners as the runs use them (the switches applied).
 fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
     args.planners
@@ -170,27 +110,6 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
         })
         .collect()
 }
-
-/// The paper's pace (`--pace paper`): [`PAPER_EXPANSIONS_PER_CALL`] expansions per call and
-/// [`PAPER_VISITS`] rewiring visits per phase and expansion (the caller makes every call last
-/// its full `t_exp` on a virtual clock).
-pub fn paper_pace(c: &mut Config) {
-    c.budget.max_expansions = PAPER_EXPANSIONS_PER_CALL;
-    c.rewiring.mode = RewireMode::PerExpansion {
-        visits: PAPER_VISITS,
-    };
-}
-
-/// Expansions per `plan` call at the paper's pace: Table 2's budgets spend `t_root + t_goal`
-/// (5-6 ms) of rewiring after every expansion, so a 150 ms call of the paper's implementation
-/// held at most about 150 / (6 + 1) = 21 expansions (1 ms for the expansion itself is an
-/// assumption). The paper's own counts at goal on bug_trap (AM-RRT*(D) 76 nodes, RT-RRT* 445,
-/// AM-RRT*(E) 1,062) are what `docs/results-pace.md` compares against.
-pub const PAPER_EXPANSIONS_PER_CALL: u32 = 20;
-
-/// Rewiring visits per phase and expansion at the paper's pace: 2-4 ms of Python at an
-/// assumed 0.25-0.5 ms per visit (a neighbourhood query and its cost checks).
-pub const PAPER_VISITS: u16 = 8;
 
 /// The settings a results folder records for these arguments.
 pub fn settings(args: &ExperimentArgs) -> Settings {
@@ -303,78 +222,6 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
             r
         })
         .collect())
-}
-
-/// The row of one goal of a run.
-#[allow(clippy::too_many_arguments)]
-pub fn row(
-    prep: &Prepared,
-    cfg: Config,
-    seed: u64,
-    g: &crate::sim::GoalRun,
-    clock: ClockKind,
-    final_nodes: usize,
-    anytime_cost_m: Option<f32>,
-    run_wall_s: f64,
-) -> Row {
-    let optimal = prep.optima().get(g.goal_index).copied().flatten();
-    row_with_optimum(
-        prep,
-        optimal,
-        cfg,
-        seed,
-        g,
-        clock,
-        final_nodes,
-        anytime_cost_m,
-        run_wall_s,
-    )
-}
-
-/// [`row`] with the leg's optimum given (`None`: not known yet, or skipped).
-#[allow(clippy::too_many_arguments)]
-pub fn row_with_optimum(
-    prep: &Prepared,
-    optimal: Option<f64>,
-    cfg: Config,
-    seed: u64,
-    g: &crate::sim::GoalRun,
-    clock: ClockKind,
-    final_nodes: usize,
-    anytime_cost_m: Option<f32>,
-    run_wall_s: f64,
-) -> Row {
-    Row {
-        planner: cfg.name().to_string(),
-        scenario: prep.scenario.name.clone(),
-        goal_index: g.goal_index + 1,
-        seed,
-        reached: g.result.reached,
-        search_time_s: g.search_s,
-        path_length_m: g.result.travelled,
-        optimal_m: optimal.map(|o| o as f32),
-        travelled_ratio: optimal
-            .filter(|_| g.result.reached)
-            .map(|o| (g.result.travelled as f64 / o) as f32),
-        collisions: g.result.collisions,
-        nodes_at_goal: g.result.nodes_at_goal,
-        search_time_call_end_s: g.search_call_end_s,
-        nodes_at_call_end: g.result.nodes_at_call_end,
-        calls: g.result.calls,
-        cost_at_start_m: g.result.cost_at_start,
-        anytime_cost_m,
-        final_nodes,
-        clock,
-        run_wall_s,
-        disc_x_m: None,
-        disc_y_m: None,
-        disc_r_m: None,
-        cost_before_drop_m: None,
-        replan_s: None,
-        replanned_cost_m: None,
-        travelled_after_drop_m: None,
-        optimal_after_drop_m: None,
-    }
 }
 
 /// The runs `rows` holds in full: every goal the run drives, or up to the first goal it did

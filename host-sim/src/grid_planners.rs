@@ -7,12 +7,30 @@
 //! the core's segment test on the same grid. `host-sim optimum` prints their lengths and CPU
 //! times next to the exact optimum.
 
+use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
 
-use crate::optimum::Open;
+/// An A* queue entry: (f, node), smallest f first (A*, Theta* and the exact optimum's
+/// search, `optimum`).
+#[derive(PartialEq)]
+pub(crate) struct Open(pub(crate) f64, pub(crate) usize);
+
+impl Eq for Open {}
+
+impl PartialOrd for Open {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Open {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+    }
+}
 
 /// A grid planner's answer: the path's length in metres, and its points.
 #[derive(Clone, Debug)]

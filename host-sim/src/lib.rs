@@ -26,6 +26,8 @@ pub mod bake;
 pub mod bench;
 #[cfg(feature = "sim")]
 pub mod bounds;
+#[cfg(feature = "sim")]
+pub mod chart;
 pub mod clearance;
 pub mod clock;
 #[cfg(feature = "sim")]
@@ -43,6 +45,8 @@ pub mod metrics;
 #[cfg(feature = "sim")]
 pub mod moving;
 pub mod optimum;
+#[cfg(feature = "sim")]
+pub mod planners;
 #[cfg(feature = "sim")]
 pub mod report;
 pub mod results;

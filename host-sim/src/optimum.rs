@@ -46,6 +46,7 @@ use std::collections::BinaryHeap;
 use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
 
+use crate::grid_planners::Open;
 use crate::maps::Scenario;
 
 /// The lattice's unit step, and its diagonal rounded down (`lattice_to`).
@@ -866,24 +867,6 @@ fn round_nn(x: f64) -> f64 {
         ((x + 0.5) as i64) as f64
     } else {
         x.round()
-    }
-}
-
-/// An A* queue entry: (f, node), smallest f first (also Theta*'s, `grid_planners`).
-#[derive(PartialEq)]
-pub(crate) struct Open(pub(crate) f64, pub(crate) usize);
-
-impl Eq for Open {}
-
-impl PartialOrd for Open {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Open {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
     }
 }
 

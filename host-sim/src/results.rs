@@ -50,8 +50,8 @@ pub enum Pace {
     /// As much as `t_exp` allows on this implementation (over a thousand expansions).
     #[default]
     Full,
-    /// The paper's pace ([`crate::experiment::PAPER_EXPANSIONS_PER_CALL`] expansions and
-    /// [`crate::experiment::PAPER_VISITS`] rewiring visits per phase and expansion), every call
+    /// The paper's pace ([`crate::sim::PAPER_EXPANSIONS_PER_CALL`] expansions and
+    /// [`crate::sim::PAPER_VISITS`] rewiring visits per phase and expansion), every call
     /// lasting its full `t_exp` on the virtual clock, as a call of the paper's Python did.
     Paper,
 }

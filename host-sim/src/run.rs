@@ -13,11 +13,11 @@ use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::clock::Clock as _;
 use std::time::Instant;
 
-use crate::experiment::row;
 use crate::results::Row;
+use crate::sim::row;
 
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
-use crate::draw::{self, Animation, Painter, Scene};
+use crate::draw::{self, Animation, Painter, Scene, scene};
 use crate::maps::Scenario;
 use crate::sim::{GoalRun, Prepared, SimPlanner, drive_each, with_planner};
 
@@ -45,32 +45,6 @@ pub struct RunArgs {
     pub pace: crate::results::Pace,
     /// Skip the exact optimum of each leg (`--no-optimum`).
     pub no_optimum: bool,
-}
-
-/// A snapshot of the planner for a picture (also `moving`'s).
-pub(crate) fn scene(
-    p: &SimPlanner<'_, '_>,
-    trail: &[Point],
-    scenario: &Scenario,
-    active: usize,
-    title: String,
-) -> Scene {
-    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
-    let n = p.path(&mut path).map_or(0, |i| i.len);
-    path.truncate(n);
-    Scene {
-        title,
-        forward: draw::edges(p.tree()),
-        reverse: draw::edges(p.reverse_tree()),
-        path,
-        trail: trail.to_vec(),
-        circles: p.map().obstacles().iter().map(|(_, c)| c).collect(),
-        start: scenario.start,
-        goals: scenario.goals.clone(),
-        active: Some(active),
-        agent: trail.last().copied(),
-        meet: None,
-    }
 }
 
 /// The moment goal 1 joins the forward tree, replayed with the run's seed one expansion per
@@ -163,7 +137,7 @@ fn write_result(
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
     // A Table 1 name, optionally with the bench's `@field=value` overrides.
-    let variant = crate::bench::parse_variants(&args.planner)?
+    let variant = crate::planners::parse_variants(&args.planner)?
         .into_iter()
         .next()
         .context("no planner named")?;
@@ -193,7 +167,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             args.clock == ClockKind::Virtual,
             "--pace paper needs --clock virtual (every call lasts its full t_exp)"
         );
-        crate::experiment::paper_pace(&mut cfg);
+        crate::sim::paper_pace(&mut cfg);
     }
     std::fs::create_dir_all(&args.out)?;
     let goals: Vec<usize> = if args.all_goals {
@@ -341,7 +315,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let mut done: Vec<Row> = Vec::new();
         let mut write_error: Option<anyhow::Error> = None;
         let on_goal = |g: &GoalRun| {
-            let r = crate::experiment::row_with_optimum(
+            let r = crate::sim::row_with_optimum(
                 &prep,
                 None,
                 cfg,

@@ -2,6 +2,9 @@
 //! table), the planner type of the simulator, and one planner run through a goal sequence
 //! under the agent protocol of the core (`bi_am_rrt::agent`).
 
+use crate::clock::ClockKind;
+use crate::results::Row;
+use bi_am_rrt::RewireMode;
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
@@ -234,7 +237,7 @@ impl Prepared {
 
     /// A named configuration fitted to this scenario, the second of the three steps a run's
     /// configuration takes (named -> fitted -> the user's overrides,
-    /// [`crate::bench::Variant::config_for`]): `e_max`, `e_search` and `root_step` follow the
+    /// [`crate::planners::Variant::config_for`]): `e_max`, `e_search` and `root_step` follow the
     /// map ([`Config::for_grid`]), or stay Table 2's metres with `paper_lengths`, and `sigma`
     /// is the scenario's ([`crate::maps::Scenario::sigma`]). Every length is replaced: pass the
     /// named configuration, and set lengths by hand after this step.
@@ -257,7 +260,7 @@ impl Prepared {
 
 /// Builds a planner for `prep` and hands it to `f`. `cfg` is what the planner gets, as it is
 /// (the robot's radius and clearance weight come from the scenario): fit a named
-/// configuration to the map first ([`Prepared::config`], or [`crate::bench::Variant::config_for`]
+/// configuration to the map first ([`Prepared::config`], or [`crate::planners::Variant::config_for`]
 /// with overrides).
 pub fn with_planner<T>(
     prep: &Prepared,
@@ -580,4 +583,97 @@ pub fn narrow_warning(
         e_max / 4.0,
         p.median_width_m,
     )
+}
+
+/// The paper's pace (`--pace paper`): [`PAPER_EXPANSIONS_PER_CALL`] expansions per call and
+/// [`PAPER_VISITS`] rewiring visits per phase and expansion (the caller makes every call last
+/// its full `t_exp` on a virtual clock).
+pub fn paper_pace(c: &mut Config) {
+    c.budget.max_expansions = PAPER_EXPANSIONS_PER_CALL;
+    c.rewiring.mode = RewireMode::PerExpansion {
+        visits: PAPER_VISITS,
+    };
+}
+
+/// Expansions per `plan` call at the paper's pace: Table 2's budgets spend `t_root + t_goal`
+/// (5-6 ms) of rewiring after every expansion, so a 150 ms call of the paper's implementation
+/// held at most about 150 / (6 + 1) = 21 expansions (1 ms for the expansion itself is an
+/// assumption). The paper's own counts at goal on bug_trap (AM-RRT*(D) 76 nodes, RT-RRT* 445,
+/// AM-RRT*(E) 1,062) are what `docs/results-pace.md` compares against.
+pub const PAPER_EXPANSIONS_PER_CALL: u32 = 20;
+
+/// Rewiring visits per phase and expansion at the paper's pace: 2-4 ms of Python at an
+/// assumed 0.25-0.5 ms per visit (a neighbourhood query and its cost checks).
+pub const PAPER_VISITS: u16 = 8;
+
+/// The row of one goal of a run.
+#[allow(clippy::too_many_arguments)]
+pub fn row(
+    prep: &Prepared,
+    cfg: Config,
+    seed: u64,
+    g: &crate::sim::GoalRun,
+    clock: ClockKind,
+    final_nodes: usize,
+    anytime_cost_m: Option<f32>,
+    run_wall_s: f64,
+) -> Row {
+    let optimal = prep.optima().get(g.goal_index).copied().flatten();
+    row_with_optimum(
+        prep,
+        optimal,
+        cfg,
+        seed,
+        g,
+        clock,
+        final_nodes,
+        anytime_cost_m,
+        run_wall_s,
+    )
+}
+
+/// [`row`] with the leg's optimum given (`None`: not known yet, or skipped).
+#[allow(clippy::too_many_arguments)]
+pub fn row_with_optimum(
+    prep: &Prepared,
+    optimal: Option<f64>,
+    cfg: Config,
+    seed: u64,
+    g: &crate::sim::GoalRun,
+    clock: ClockKind,
+    final_nodes: usize,
+    anytime_cost_m: Option<f32>,
+    run_wall_s: f64,
+) -> Row {
+    Row {
+        planner: cfg.name().to_string(),
+        scenario: prep.scenario.name.clone(),
+        goal_index: g.goal_index + 1,
+        seed,
+        reached: g.result.reached,
+        search_time_s: g.search_s,
+        path_length_m: g.result.travelled,
+        optimal_m: optimal.map(|o| o as f32),
+        travelled_ratio: optimal
+            .filter(|_| g.result.reached)
+            .map(|o| (g.result.travelled as f64 / o) as f32),
+        collisions: g.result.collisions,
+        nodes_at_goal: g.result.nodes_at_goal,
+        search_time_call_end_s: g.search_call_end_s,
+        nodes_at_call_end: g.result.nodes_at_call_end,
+        calls: g.result.calls,
+        cost_at_start_m: g.result.cost_at_start,
+        anytime_cost_m,
+        final_nodes,
+        clock,
+        run_wall_s,
+        disc_x_m: None,
+        disc_y_m: None,
+        disc_r_m: None,
+        cost_before_drop_m: None,
+        replan_s: None,
+        replanned_cost_m: None,
+        travelled_after_drop_m: None,
+        optimal_after_drop_m: None,
+    }
 }

@@ -19,10 +19,10 @@ use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 use serde::Serialize;
 
-use crate::bench::Variant;
 use crate::clock::CpuClock;
 use crate::maps::Scenario;
 use crate::optimum::Corners;
+use crate::planners::Variant;
 use crate::sim::{Prepared, SizedPlanner, with_planner_at};
 use crate::stats::median;
 

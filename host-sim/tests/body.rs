@@ -193,7 +193,7 @@ fn regression_maze512_no_collisions() {
         .remove(0);
     let prep = host_sim::sim::Prepared::new(sc);
     prep.diffusion().unwrap();
-    let mut cfg = host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap()[0].cfg;
+    let mut cfg = host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap()[0].cfg;
     cfg.budget.t_exp = std::time::Duration::from_millis(5);
     let goals: Vec<usize> = (0..prep.scenario.goals.len()).collect();
     let seeds: u64 = std::env::var("MAZE512_SEEDS")

@@ -71,7 +71,7 @@ fn scenario_files_read_pngs_with_the_mean_rule() {
 fn base_args(scenarios: Vec<maps::Scenario>, planners: &str, out: &Path) -> ExperimentArgs {
     ExperimentArgs {
         scenarios,
-        planners: experiment::parse_planners(planners).unwrap(),
+        planners: host_sim::planners::parse_planners(planners).unwrap(),
         repeats: 1,
         clock: ClockKind::Virtual,
         goals: Goals::First,
@@ -593,10 +593,10 @@ fn export_writes_a_grid_a_table_and_rust_source() {
 /// obstacle radius out of range refused with the range (it was accepted and nothing dropped).
 #[test]
 fn regression_planner_names_and_obstacle_radius_are_checked() {
-    let p = experiment::parse_planners("bi-am-rrt*(d), rt-rrt*").unwrap();
+    let p = host_sim::planners::parse_planners("bi-am-rrt*(d), rt-rrt*").unwrap();
     assert_eq!(p[0].name().to_string(), "Bi-AM-RRT*(D)");
     assert_eq!(p[1].name().to_string(), "RT-RRT*");
-    let e = experiment::parse_planners("AM-RRT*(X)")
+    let e = host_sim::planners::parse_planners("AM-RRT*(X)")
         .unwrap_err()
         .to_string();
     assert!(
@@ -831,7 +831,7 @@ fn bench_measures_every_leg_variant_and_seed() {
     let s = maps::builtin_by_name("open").unwrap();
     let legs = s.goals.len();
     let variants =
-        host_sim::bench::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8").unwrap();
+        host_sim::planners::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8").unwrap();
     assert_eq!(variants[1].name, "Bi-AM-RRT*(E) tuned@e_search=8");
     assert_eq!(variants[1].cfg.search.e_search, 8.0);
     let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
@@ -865,7 +865,7 @@ fn bench_measures_every_leg_variant_and_seed() {
     for f in ["bench.csv", "summary.csv", "summary.md"] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
-    assert!(host_sim::bench::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
+    assert!(host_sim::planners::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
 }
 
 /// `bench` runs the grid planners on every leg by default (issue 42): A* and Theta* rows per
@@ -879,7 +879,7 @@ fn bench_runs_the_grid_planners_on_every_leg() {
     let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
-        variants: host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        variants: host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
         seeds: 2,
         budgets: vec![0.002],
         nodes: 2048,
@@ -929,7 +929,7 @@ fn bench_until_first_ends_each_run_at_its_first_solution() {
     let args = |until_first| host_sim::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
-        variants: host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        variants: host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
         seeds: 3,
         budgets: vec![0.002, 0.02],
         nodes: 2048,
@@ -967,7 +967,7 @@ fn bench_runs_on_the_steady_clock() {
     let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![1, 2],
-        variants: host_sim::bench::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        variants: host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
         seeds: 2,
         budgets: vec![0.002],
         nodes: 2048,
@@ -1019,7 +1019,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
     let args = |seeds| host_sim::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![1, 2],
-        variants: host_sim::bench::parse_variants("bi-am-rrt*(e)").unwrap(),
+        variants: host_sim::planners::parse_variants("bi-am-rrt*(e)").unwrap(),
         seeds,
         budgets: vec![0.002],
         nodes: 2048,
@@ -1103,7 +1103,7 @@ fn a_short_soak_changes_goals_and_stays_safe() {
     let dir = tempfile::tempdir().unwrap();
     let rows = host_sim::soak::run(&host_sim::soak::SoakArgs {
         scenario: maps::builtin_by_name("maze").unwrap(),
-        variant: host_sim::bench::parse_variants("Bi-AM-RRT*(E) tuned").unwrap()[0].clone(),
+        variant: host_sim::planners::parse_variants("Bi-AM-RRT*(E) tuned").unwrap()[0].clone(),
         seconds: 1.0,
         goal_every: 0.25,
         speed: 0.7,
@@ -1340,7 +1340,7 @@ fn run_lengths_follow_the_map() {
         } else {
             "Bi-AM-RRT*(D)"
         };
-        let hand = host_sim::bench::parse_variants(&format!("{spec}@e_max=8")).unwrap();
+        let hand = host_sim::planners::parse_variants(&format!("{spec}@e_max=8")).unwrap();
         let c = hand[0].config_for(&maze).unwrap();
         assert_eq!(c.search.e_max, 8.0, "a length set by hand");
         sc.paper_lengths = true;
@@ -1370,7 +1370,7 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
     .unwrap();
     let load = || maps::load_scenarios(&dir.path().join("s.toml"), None).unwrap()[0].clone();
     let spec = "Bi-AM-RRT*(D)";
-    let named = host_sim::bench::parse_variants(spec).unwrap()[0].clone();
+    let named = host_sim::planners::parse_variants(spec).unwrap()[0].clone();
     // Fitted to the 40 m map (scale 0.4): e_max 5 m -> 2 m, kept at 4 cells (4 m); sigma 12 m.
     let fitted = Prepared::new(load());
     let c = named.config_for(&fitted).unwrap();
@@ -1387,7 +1387,8 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
         "Table 2's sigma with the paper's lengths"
     );
     // Overrides as written, whatever the named value.
-    let hand = host_sim::bench::parse_variants("Bi-AM-RRT*(D)@e_max=5@sigma=7").unwrap()[0].clone();
+    let hand =
+        host_sim::planners::parse_variants("Bi-AM-RRT*(D)@e_max=5@sigma=7").unwrap()[0].clone();
     let c = hand.config_for(&fitted).unwrap();
     assert_eq!(c.search.e_max, 5.0, "@e_max=5 is 5 m, not the fitted 4 m");
     assert_eq!(c.search.sigma, 7.0, "@sigma=7 is kept");

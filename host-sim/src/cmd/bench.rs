@@ -113,7 +113,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     for s in &mut scs {
         s.paper_lengths = paper_lengths;
     }
-    let variants = host_sim::bench::parse_variants(&planners)?;
+    let variants = host_sim::planners::parse_variants(&planners)?;
     host_sim::bench::run(&host_sim::bench::BenchArgs {
         scenarios: scs,
         legs: legs.unwrap_or_default(),

@@ -143,7 +143,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         wait_from_set,
         pace,
         no_optimum,
-        as_printed: experiment::parse_as_printed(&as_printed)?,
+        as_printed: host_sim::planners::parse_as_printed(&as_printed)?,
         meet_all_pairs,
         obstacle,
         shard,
@@ -155,7 +155,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
             experiment::Existing::Refuse
         },
         scenarios: scs,
-        planners: experiment::parse_planners(&planners)?,
+        planners: host_sim::planners::parse_planners(&planners)?,
         repeats,
         clock,
         goals,

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use host_sim::experiment;
 use host_sim::maps;
 
 use crate::args::*;
@@ -43,7 +42,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         None => maps::builtin_scenarios(),
     };
     let scs = body.apply_all(scs)?;
-    let base = experiment::parse_planners(&planner)?
+    let base = host_sim::planners::parse_planners(&planner)?
         .first()
         .copied()
         .context("no planner")?;

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::experiment;
 use host_sim::maps;
 
 use crate::args::*;
@@ -53,7 +52,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     let scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
     host_sim::growth::growth(
         &scs,
-        &experiment::parse_planners(&planners)?,
+        &host_sim::planners::parse_planners(&planners)?,
         seconds,
         call_ms,
         seed,

@@ -67,7 +67,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         bail!("--minutes, --goal-every and --speed must be positive");
     }
     let mut scs = body.apply_all(maps::load_scenarios(&scenarios, Some(&[scenario]))?)?;
-    let variant = host_sim::bench::parse_variants(&planner)?
+    let variant = host_sim::planners::parse_variants(&planner)?
         .into_iter()
         .next()
         .context("no planner")?;

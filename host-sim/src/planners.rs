@@ -1,0 +1,193 @@
+//! Planners as the commands name them: Table 1 names (any case, with or without ` tuned`),
+//! `all`, and the `@field=value` overrides; a run's configuration in three steps (the named
+//! planner, its lengths fitted to the map, the overrides as written: [`Variant::config_for`]).
+
+use anyhow::{Context, Result, anyhow, bail};
+use bi_am_rrt::Config;
+
+use crate::sim::Prepared;
+
+/// `all` or a comma-separated list of Table 1 names (any case, optionally ` tuned`).
+pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
+    if spec.trim().eq_ignore_ascii_case("all") {
+        return Ok(Config::table1().to_vec());
+    }
+    spec.split(',')
+        .map(|name| {
+            let name = name.trim();
+            // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
+            let found = Config::table1()
+                .into_iter()
+                .chain(Config::table1().map(Config::tuned))
+                .find(|c| c.name().to_string().eq_ignore_ascii_case(name));
+            found.with_context(|| {
+                let all: Vec<String> = Config::table1()
+                    .iter()
+                    .map(|c| c.name().to_string())
+                    .collect();
+                format!(
+                    "unknown planner {name:?}; Table 1 names are {} (each also with the \
+                     suffix \" tuned\")",
+                    all.join(", ")
+                )
+            })
+        })
+        .collect()
+}
+
+/// `none`, `all`, or switch names of [`bi_am_rrt::AsPrinted::NAMES`] joined by `,` or `+`.
+pub fn parse_as_printed(spec: &str) -> Result<bi_am_rrt::AsPrinted> {
+    let spec = spec.trim();
+    if spec.eq_ignore_ascii_case("all") {
+        return Ok(bi_am_rrt::AsPrinted::ALL);
+    }
+    let mut out = bi_am_rrt::AsPrinted::NONE;
+    if spec.eq_ignore_ascii_case("none") || spec.is_empty() {
+        return Ok(out);
+    }
+    for name in spec.split([',', '+']) {
+        if !out.set(name.trim(), true) {
+            bail!(
+                "unknown part {name:?} of Algorithms 4 and 6; the parts are {} (or all, none)",
+                bi_am_rrt::AsPrinted::NAMES.join(", ")
+            );
+        }
+    }
+    Ok(out)
+}
+
+/// The names of the switches that are on, in [`bi_am_rrt::AsPrinted::NAMES`]'s order.
+pub fn as_printed_names(p: bi_am_rrt::AsPrinted) -> Vec<String> {
+    bi_am_rrt::AsPrinted::NAMES
+        .iter()
+        .filter(|n| {
+            let mut q = p;
+            q.set(n, false);
+            q != p
+        })
+        .map(|n| n.to_string())
+        .collect()
+}
+
+/// A planner as a command names it: a Table 1 name and the fields set by hand.
+#[derive(Clone, Debug)]
+pub struct Variant {
+    /// The name in the output.
+    pub name: String,
+    /// The named configuration with the overrides applied as written (lengths not fitted to
+    /// any map): its name, metric and switches; a run's configuration is
+    /// [`Variant::config_for`].
+    pub cfg: Config,
+    /// The named configuration, before the overrides.
+    pub named: Config,
+    /// The overrides (`field`, `value`), in the order written.
+    pub overrides: Vec<(String, String)>,
+}
+
+impl Variant {
+    /// The configuration a run on `prep` gets, in three explicit steps: the named
+    /// configuration, its lengths fitted to the map ([`Prepared::config`]: Table 2's with
+    /// `paper_lengths`, and the scenario's `sigma`), then the overrides as written (a length
+    /// set by hand is that many metres, whatever the named value).
+    pub fn config_for(&self, prep: &Prepared) -> Result<Config> {
+        let mut cfg = prep.config(self.named);
+        for (k, v) in &self.overrides {
+            apply(&mut cfg, k, v)?;
+        }
+        cfg.validate()
+            .map_err(|e| anyhow!("{} on {}: {e}", self.name, prep.scenario.name))?;
+        Ok(cfg)
+    }
+}
+
+/// Comma-separated planner names: Table 1 names in any case, with or without the suffix
+/// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`,
+/// `faithful`, `e_max`, `e_search`, `sigma`, `steer_candidates`, `p_goal`, `p_uniform`,
+/// `p_beacon`, `p_gap`, `path_shortcuts`, `root_step`, `clock_every`, `clock_every_max`, `n_max`,
+/// `n_max_informed`, `recycle_cover`, `as_printed` (`all` or parts joined by `+`),
+/// `profile` (`paper` or `tuned`: the tuned profile's changes without its parameters, or the
+/// reverse)), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in one run.
+pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
+    spec.split(',')
+        .map(|item| {
+            let mut parts = item.trim().split('@');
+            let name = parts.next().unwrap_or_default();
+            let named = parse_planners(name)?
+                .into_iter()
+                .next()
+                .ok_or_else(|| anyhow!("empty planner name"))?;
+            let mut cfg = named;
+            let mut overrides = Vec::new();
+            for o in parts {
+                let (k, v) = o
+                    .split_once('=')
+                    .ok_or_else(|| anyhow!("override {o:?}: write field=value"))?;
+                apply(&mut cfg, k.trim(), v.trim()).with_context(|| format!("override {o:?}"))?;
+                overrides.push((k.trim().to_string(), v.trim().to_string()));
+            }
+            cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
+            let label = item.trim().split_once('@').map(|x| x.1);
+            Ok(Variant {
+                name: match label {
+                    Some(l) => format!("{}@{l}", cfg.name()),
+                    None => cfg.name().to_string(),
+                },
+                cfg,
+                named,
+                overrides,
+            })
+        })
+        .collect()
+}
+
+fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
+    use bi_am_rrt::RewireMode;
+    match field {
+        "visits" => cfg.rewiring.mode = RewireMode::PerExpansion { visits: v.parse()? },
+        "faithful" => {
+            if v.parse::<bool>()? {
+                cfg.rewiring.mode = RewireMode::Faithful;
+            }
+        }
+        "e_max" => cfg.search.e_max = v.parse()?,
+        "n_max" => cfg.memory.n_max = v.parse()?,
+        "n_max_informed" => cfg.memory.n_max_informed = v.parse()?,
+        "clock_every" => cfg.budget.clock_every = v.parse()?,
+        "clock_every_max" => cfg.budget.clock_every_max = v.parse()?,
+        "steer_candidates" => cfg.search.steer_candidates = v.parse()?,
+        "p_goal" => cfg.search.p_goal = v.parse()?,
+        "p_uniform" => cfg.search.p_uniform = v.parse()?,
+        "e_search" => cfg.search.e_search = v.parse()?,
+        "path_shortcuts" => cfg.rewiring.path_shortcuts = v.parse()?,
+        "p_beacon" => cfg.search.p_beacon = v.parse()?,
+        "p_gap" => cfg.search.p_gap = v.parse()?,
+        "recycle_cover" => cfg.memory.recycle_cover = v.parse()?,
+        "root_step" => cfg.rewiring.root_step = v.parse()?,
+        "sigma" => cfg.search.sigma = v.parse()?,
+        "as_printed" => cfg.as_printed = parse_as_printed(v)?,
+        "profile" => {
+            cfg.profile = match v {
+                "paper" => bi_am_rrt::Profile::Paper,
+                "tuned" => bi_am_rrt::Profile::Tuned,
+                _ => return Err(anyhow!("profile {v:?}: paper or tuned")),
+            }
+        }
+        "steer_fan"
+        | "nearest_step"
+        | "reuse_tests"
+        | "rewire_while_searching"
+        | "connect"
+        | "rewire_new"
+        | "recycle_when_full"
+        | "density_trades"
+        | "corner_cuts" => {
+            return Err(anyhow!(
+                "{field:?} is part of the tuned profile since issue 26 (no switch of its own; \
+                 `@profile=paper` turns all of them off; measured one by one in \
+                 docs/performance.md, \"One tuned default\" and \"Corner cuts\")"
+            ));
+        }
+        _ => return Err(anyhow!("unknown field {field:?}")),
+    }
+    Ok(())
+}
