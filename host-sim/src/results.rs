@@ -50,9 +50,9 @@ pub enum Pace {
     /// As much as `t_exp` allows on this implementation (over a thousand expansions).
     #[default]
     Full,
-    /// The paper's pace ([`crate::sim::PAPER_EXPANSIONS_PER_CALL`] expansions and
-    /// [`crate::sim::PAPER_VISITS`] rewiring visits per phase and expansion), every call
-    /// lasting its full `t_exp` on the virtual clock, as a call of the paper's Python did.
+    /// The paper's pace: 20 expansions a call and 8 rewiring visits per phase and expansion
+    /// (`sim::PAPER_EXPANSIONS_PER_CALL`, `sim::PAPER_VISITS`), every call lasting its full
+    /// `t_exp` on the virtual clock, as a call of the paper's Python did.
     Paper,
 }
 
