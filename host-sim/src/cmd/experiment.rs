@@ -89,7 +89,7 @@ pub struct Cmd {
     #[arg(long)]
     paper_lengths: bool,
     /// Parts of Algorithms 4 and 6 run exactly as printed instead of this crate's reading
-    /// (src/rewire.rs): `all`, `none`, or a comma-separated list of alg4-take (Algorithm
+    /// (src/rewire/mod.rs): `all`, `none`, or a comma-separated list of alg4-take (Algorithm
     /// 4 dequeues x_r2), alg6-take (Algorithm 6 pops x_r2), alg6-cost (Algorithm 6's
     /// cost test through x_r1), alg6-clear (Algorithm 6's clearing test on Second(S)).
     #[arg(long, default_value = "none")]
