@@ -6,14 +6,23 @@
 //! Without the default feature `sim` only the loaders, the grid graph, the metrics and the
 //! clocks are built (no `faer`, no `plotters`): what the fuzz targets need.
 //!
-//! Modules, one concern each: `maps` (PNG and ROS maps, scenario files, built-ins), `graph`
-//! (grid graph), `diffusion` and `bake` (metric tables), `metrics`, `optimum` (exact shortest
-//! paths), `clearance` (a driven trail's distance from the walls), `clock`, `sim` (a scenario prepared for runs, one run under the protocol), `run`
-//! (one run drawn), `draw` (pictures), `experiment` (the matrix), `results` (results folders:
-//! rows, manifest, summary, merge), `report` (charts and the Markdown report), `stats`,
-//! `bench`, `soak`, `stress`, `bounds` and `growth` (measurements), `moving` (people walking
-//! through a scenario, issue 27). `main.rs` is the
-//! command-line layer.
+//! The library in floors, lowest first (a module imports only from floors below it and from
+//! none of the commands):
+//!
+//! - Scenarios and geometry: `maps` (PNG and ROS maps, scenario files, built-ins), `graph`
+//!   (the grid graph), `optimum` (exact shortest paths), `grid_planners` (A*, Theta*),
+//!   `clearance` (a driven trail's distance from the walls), `stats`, `clock`.
+//! - Metric data: `diffusion`, `aggregate` and `bake` (metric tables), `metrics`.
+//! - Results and drawing: `results` (results folders: rows, manifest, summary, merge), `draw`
+//!   (pictures, a planner's scene), `chart` (bar and box panels).
+//! - The simulation: `sim` (a scenario prepared for runs, a configuration fitted to it, the
+//!   agent's drive, the paper's pace, a run's rows), `planners` (planner names and
+//!   `@field=value` overrides).
+//! - Commands, each on the floors only: `run` (one run drawn), `moving` (people walking
+//!   through a scenario, issue 27), `experiment` (the matrix), `report` (charts and the
+//!   Markdown report), `bench`, `soak`, `stress`, `bounds` and `growth` (measurements). The
+//!   binary's `main.rs` is the clap tree; `cmd/` holds one file per command (its options and
+//!   what it runs) and `args.rs` the option groups they share.
 //!
 //! The core never knows this crate exists: everything here goes through the core's public API
 //! (`Planner`, `Metric`, `Clock`, `DiffusionTable`, ...).
