@@ -598,29 +598,3 @@ impl<'a, 'g> Animation<'a, 'g> {
         Ok(())
     }
 }
-
-/// A snapshot of the planner for a picture (`run`'s and `moving`'s).
-pub(crate) fn scene(
-    p: &crate::sim::SimPlanner<'_, '_>,
-    trail: &[Point],
-    scenario: &crate::maps::Scenario,
-    active: usize,
-    title: String,
-) -> Scene {
-    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
-    let n = p.path(&mut path).map_or(0, |i| i.len);
-    path.truncate(n);
-    Scene {
-        title,
-        forward: edges(p.tree()),
-        reverse: edges(p.reverse_tree()),
-        path,
-        trail: trail.to_vec(),
-        circles: p.map().obstacles().iter().map(|(_, c)| c).collect(),
-        start: scenario.start,
-        goals: scenario.goals.clone(),
-        active: Some(active),
-        agent: trail.last().copied(),
-        meet: None,
-    }
-}

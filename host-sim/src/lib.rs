@@ -14,10 +14,11 @@
 //!   `clearance` (a driven trail's distance from the walls), `stats`, `clock`.
 //! - Metric data: `diffusion`, `aggregate` and `bake` (metric tables), `metrics`.
 //! - Results and drawing: `results` (results folders: rows, manifest, summary, merge), `draw`
-//!   (pictures, a planner's scene), `chart` (bar and box panels).
+//!   (pictures), `chart` (bar and box panels).
 //! - The simulation: `sim` (a scenario prepared for runs, a configuration fitted to it, the
-//!   agent's drive, the paper's pace, a run's rows), `planners` (planner names and
-//!   `@field=value` overrides).
+//!   agent's drive, the paper's pace, a run's rows, a planner's scene for a picture),
+//!   `planners` (planner names and `@field=value` overrides). One circle is left:
+//!   `aggregate` and `diffusion` use each other's types.
 //! - Commands, each on the floors only: `run` (one run drawn), `moving` (people walking
 //!   through a scenario, issue 27), `experiment` (the matrix), `report` (charts and the
 //!   Markdown report), `bench`, `soak`, `stress`, `bounds` and `growth` (measurements). The

@@ -54,8 +54,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::chart::{BarPanel, Bars, render};
 use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
-use crate::draw::scene;
 use crate::draw::{Animation, Painter, Scene};
+use crate::sim::scene;
 use crate::sim::{Prepared, SimPlanner, with_live_planner, with_planner};
 use crate::stats::median;
 

@@ -17,8 +17,9 @@ use crate::results::Row;
 use crate::sim::row;
 
 use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
-use crate::draw::{self, Animation, Painter, Scene, scene};
+use crate::draw::{self, Animation, Painter, Scene};
 use crate::maps::Scenario;
+use crate::sim::scene;
 use crate::sim::{GoalRun, Prepared, SimPlanner, drive_each, with_planner};
 
 /// Arguments of `run`.

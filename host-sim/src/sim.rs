@@ -677,3 +677,29 @@ pub fn row_with_optimum(
         optimal_after_drop_m: None,
     }
 }
+
+/// A snapshot of the planner for a picture (`run`'s and `moving`'s).
+pub(crate) fn scene(
+    p: &SimPlanner<'_, '_>,
+    trail: &[Point],
+    scenario: &crate::maps::Scenario,
+    active: usize,
+    title: String,
+) -> crate::draw::Scene {
+    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
+    let n = p.path(&mut path).map_or(0, |i| i.len);
+    path.truncate(n);
+    crate::draw::Scene {
+        title,
+        forward: crate::draw::edges(p.tree()),
+        reverse: crate::draw::edges(p.reverse_tree()),
+        path,
+        trail: trail.to_vec(),
+        circles: p.map().obstacles().iter().map(|(_, c)| c).collect(),
+        start: scenario.start,
+        goals: scenario.goals.clone(),
+        active: Some(active),
+        agent: trail.last().copied(),
+        meet: None,
+    }
+}
