@@ -149,3 +149,18 @@ pub(crate) fn load_map(spec: &str, resolution: Option<f32>) -> Result<maps::Owne
     }
     Ok(grid)
 }
+
+/// The one scenario of a command that runs one: `--scenarios FILE --scenario NAME`, or the
+/// built-in `--builtin NAME` when neither is given.
+pub(crate) fn one_scenario(
+    builtin: &str,
+    scenarios: Option<PathBuf>,
+    scenario: Option<String>,
+) -> Result<maps::Scenario> {
+    Ok(match (scenarios, scenario) {
+        (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
+        (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
+        (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
+        (None, None) => maps::builtin_by_name(builtin)?,
+    })
+}

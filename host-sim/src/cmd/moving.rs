@@ -5,9 +5,8 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
-use host_sim::maps;
 
 use crate::args::*;
 
@@ -61,12 +60,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         out,
         animate,
     } = cmd;
-    let sc = match (scenarios, scenario) {
-        (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
-        (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
-        (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
-        (None, None) => maps::builtin_by_name(&builtin)?,
-    };
+    let sc = one_scenario(&builtin, scenarios, scenario)?;
     let prep = host_sim::sim::Prepared::new(body.apply(sc)?);
     host_sim::moving::moving(
         &prep,

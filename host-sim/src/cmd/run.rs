@@ -2,10 +2,9 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use host_sim::clock::ClockKind;
-use host_sim::maps;
 use host_sim::run::{self, RunArgs};
 
 use crate::args::*;
@@ -86,12 +85,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         pace,
         no_optimum,
     } = cmd;
-    let sc = match (scenarios, scenario) {
-        (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
-        (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
-        (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
-        (None, None) => maps::builtin_by_name(&builtin)?,
-    };
+    let sc = one_scenario(&builtin, scenarios, scenario)?;
     let mut sc = body.apply(sc)?;
     sc.paper_lengths = paper_lengths;
     run::run(&RunArgs {
