@@ -72,12 +72,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// Whether at least `k` other nodes share the index bucket of node `id`.
-    pub(super) fn has_company<C: Clock + ?Sized>(
-        &self,
-        id: NodeId,
-        k: u16,
-        meter: &Meter<'_, C>,
-    ) -> bool {
+    fn has_company<C: Clock + ?Sized>(&self, id: NodeId, k: u16, meter: &Meter<'_, C>) -> bool {
         let (yes, seen) = self.index.bucket_has_others(id, self.pos(id), k);
         meter.charge(seen.saturating_add(2));
         yes
@@ -86,7 +81,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// [`TreeStore::recycle`] for a trade when given: removing only a leaf whose score is
     /// above the trade's bound and which keeps the trade's cover (without the fallback scan:
     /// no such leaf among the draws, no removal).
-    pub(super) fn recycle_above<R: Rng + ?Sized, C: Clock + ?Sized>(
+    fn recycle_above<R: Rng + ?Sized, C: Clock + ?Sized>(
         &mut self,
         rng: &mut R,
         toward: Point,
@@ -213,7 +208,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
 
     /// After a removal: ids in the sweeps' queues and stack that moved are renamed, and ids
     /// that no longer exist are replaced by the root (a harmless extra visit).
-    pub(super) fn rename_in_sweeps(&mut self, moved: Option<(NodeId, NodeId)>) {
+    fn rename_in_sweeps(&mut self, moved: Option<(NodeId, NodeId)>) {
         let len = self.tree.len();
         let root = self.tree.root().unwrap_or(NodeId(0));
         let fix = |id: &mut NodeId| {

@@ -12,9 +12,9 @@ use crate::slots::{cell_index, sat_u32, to_u16};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Disc {
     /// `(radius / cell)^2`, widened by a relative 1e-6 so that rounding marks more, never less.
-    pub(super) k2: f32,
+    k2: f32,
     /// Rows the rule reaches on each side.
-    pub(super) reach: u16,
+    reach: u16,
 }
 
 impl Disc {
@@ -29,7 +29,7 @@ impl Disc {
 
     /// How many columns the rule reaches on each side in a row `dr` rows away (`None`: none
     /// of that row; a radius of 0 marks only the occupied cell itself).
-    pub(super) fn half(&self, dr: u16) -> Option<u16> {
+    fn half(&self, dr: u16) -> Option<u16> {
         let gap = f32::from(dr.saturating_sub(1));
         let room = self.k2 - gap * gap;
         if room <= 0.0 {
@@ -42,7 +42,7 @@ impl Disc {
     /// Whether cell `(col, row)` of a `width x height` grid is marked, with `occupied(row, c0,
     /// c1)` telling whether any cell of a run is occupied (runs that reach past the grid's
     /// edge count as occupied: the map's edge is a wall to the body).
-    pub(super) fn marks(
+    fn marks(
         &self,
         col: u16,
         row: u16,
@@ -101,7 +101,7 @@ impl Disc {
 }
 
 /// Whether any of the first `cells` bits of `bits` is clear (a free cell).
-pub(super) fn any_free(bits: &[u8], cells: usize) -> bool {
+fn any_free(bits: &[u8], cells: usize) -> bool {
     let (full, rest) = (cells / 8, cells % 8);
     bits.iter().take(full).any(|&b| b != 0xff)
         || (rest > 0

@@ -168,7 +168,7 @@ impl<'a> OccupancyGrid<'a> {
 
     /// The point test with `free(row, c0, c1)` as the test of a run of cells.
     #[inline(always)]
-    pub(super) fn point_spans_free(&self, p: Point, free: impl Fn(u16, u16, u16) -> bool) -> bool {
+    fn point_spans_free(&self, p: Point, free: impl Fn(u16, u16, u16) -> bool) -> bool {
         const M: f32 = CONTACT_MARGIN;
         if !self.contains(p) {
             return false;
@@ -184,12 +184,7 @@ impl<'a> OccupancyGrid<'a> {
 
     /// The segment test with `free(row, c0, c1)` as the test of a run of cells.
     #[inline(always)]
-    pub(super) fn segment_spans_free(
-        &self,
-        a: Point,
-        b: Point,
-        free: impl Fn(u16, u16, u16) -> bool,
-    ) -> bool {
+    fn segment_spans_free(&self, a: Point, b: Point, free: impl Fn(u16, u16, u16) -> bool) -> bool {
         if !self.contains(a) || !self.contains(b) {
             return false;
         }
@@ -221,7 +216,7 @@ impl<'a> OccupancyGrid<'a> {
     /// The traversal: for each grid row the segment (thickened by the contact margin) crosses,
     /// the contiguous run of columns `c0..=c1` it touches in that row.
     #[inline(always)]
-    pub(super) fn for_each_span<F>(&self, a: Point, b: Point, f: F) -> ControlFlow<()>
+    fn for_each_span<F>(&self, a: Point, b: Point, f: F) -> ControlFlow<()>
     where
         F: FnMut(u16, u16, u16) -> ControlFlow<()>,
     {
@@ -409,6 +404,6 @@ pub(super) fn segment_box_dist_sq(a: Point, b: Point, lo: Point, hi: Point) -> f
 /// The cell index of coordinate `v` (in cells) on an axis of `len` cells: values below zero
 /// truncate to 0 like a clamped floor; the far side is clamped to the last cell.
 #[inline]
-pub(super) fn axis_index(v: f32, len: u16) -> u16 {
+fn axis_index(v: f32, len: u16) -> u16 {
     to_u16(sat_u32(v).min(u32::from(len).saturating_sub(1)))
 }

@@ -58,7 +58,7 @@ impl Exact<'_> {
 
     /// The test and its work: a unit per row of the band, per 8 cells of a run with an
     /// occupied cell, and per occupied cell measured.
-    pub(super) fn segment_free_work(&self, a: Point, b: Point) -> (bool, u32) {
+    fn segment_free_work(&self, a: Point, b: Point) -> (bool, u32) {
         let g = &self.raw;
         if !g.contains(a) || !g.contains(b) {
             return (false, 1);

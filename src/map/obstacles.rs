@@ -31,7 +31,7 @@ impl Circle {
         segment_point_dist_sq(a, b, self.center) <= self.radius * self.radius
     }
 
-    pub(super) fn is_valid(&self) -> bool {
+    fn is_valid(&self) -> bool {
         self.center.is_finite() && self.radius.is_finite() && self.radius > 0.0
     }
 }
@@ -104,7 +104,7 @@ impl Moving {
         }
     }
 
-    pub(super) fn is_valid(&self) -> bool {
+    fn is_valid(&self) -> bool {
         self.circle.is_valid() && self.velocity.is_finite() && self.trusted_for >= 0.0
     }
 }
@@ -126,13 +126,13 @@ pub struct ObstacleId(pub u32);
 /// both tests are the paper's.
 #[derive(Clone, Debug)]
 pub struct Obstacles<const K: usize> {
-    pub(super) items: heapless::Vec<(ObstacleId, Moving), K>,
-    pub(super) next_id: u32,
+    items: heapless::Vec<(ObstacleId, Moving), K>,
+    next_id: u32,
     /// Edge window in seconds and the obstacles' top speed past a prediction, in m/s.
-    pub(super) window: f32,
-    pub(super) bound: f32,
+    window: f32,
+    bound: f32,
     /// The robot's radius: every disc is kept grown by it ([`Obstacles::set_pad`]).
-    pub(super) pad: f32,
+    pad: f32,
 }
 
 impl<const K: usize> Default for Obstacles<K> {
@@ -177,13 +177,13 @@ impl<const K: usize> Obstacles<K> {
     }
 
     /// `obstacle` grown by the pad.
-    pub(super) fn padded(&self, mut obstacle: Moving) -> Moving {
+    fn padded(&self, mut obstacle: Moving) -> Moving {
         obstacle.circle.radius += self.pad;
         obstacle
     }
 
     /// A grown disc as given.
-    pub(super) fn unpadded(&self, mut circle: Circle) -> Circle {
+    fn unpadded(&self, mut circle: Circle) -> Circle {
         circle.radius -= self.pad;
         circle
     }

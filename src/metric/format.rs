@@ -231,7 +231,7 @@ impl PieceParts {
 
 /// Copies `src` into `dst` (lengths equal by construction; `copy_from_slice` would carry a
 /// panicking length check).
-pub(super) fn copy_bytes(dst: &mut [u8], src: &[u8]) {
+fn copy_bytes(dst: &mut [u8], src: &[u8]) {
     for (d, s) in dst.iter_mut().zip(src) {
         *d = *s;
     }

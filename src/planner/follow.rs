@@ -153,7 +153,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// After recycling in the forward tree: the goal node's id may have moved.
-    pub(super) fn rename_goal(&mut self, renamed: NodeId) {
+    fn rename_goal(&mut self, renamed: NodeId) {
         if let Some(g) = self.goal.as_mut()
             && g.node.is_some()
         {
@@ -190,7 +190,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// One step of [`Planner::follow`].
-    pub(super) fn follow_once<C: Clock + ?Sized>(
+    fn follow_once<C: Clock + ?Sized>(
         &mut self,
         agent: Point,
         meter: &Meter<'_, C>,
@@ -270,7 +270,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// Makes `node` a child of the root when the segment is free and that shortens its path
     /// (a Theta* shortcut at the root, by the rewiring step). Whether it did.
-    pub(super) fn shortcut_from_root<C: Clock + ?Sized>(
+    fn shortcut_from_root<C: Clock + ?Sized>(
         &mut self,
         node: NodeId,
         meter: &Meter<'_, C>,
@@ -292,11 +292,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// a goal that changes never finds the agent bound to a root far away. The edge was
     /// free, so are its parts. Returns the node to re-root at: `next` when the edge is short,
     /// the step 0, or the arena has no slot to give.
-    pub(super) fn split_long_edge<C: Clock + ?Sized>(
-        &mut self,
-        next: NodeId,
-        meter: &Meter<'_, C>,
-    ) -> NodeId {
+    fn split_long_edge<C: Clock + ?Sized>(&mut self, next: NodeId, meter: &Meter<'_, C>) -> NodeId {
         let Some(root) = self.fwd.tree.root() else {
             return next;
         };

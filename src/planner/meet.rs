@@ -45,12 +45,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// Grafts the reverse tree below forward node `a` at reverse node `b` (their segment tested
     /// free) and records the goal joining; returns whether the graft was made.
-    pub(super) fn meet<C: Clock + ?Sized>(
-        &mut self,
-        a: NodeId,
-        b: NodeId,
-        meter: &Meter<'_, C>,
-    ) -> bool {
+    fn meet<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {
         let segment = [self.fwd.pos(a), self.rev.pos(b)];
         let met = self.graft(a, b, meter);
         if met {

@@ -127,7 +127,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// The call's meter (set after the call's deadline, whose reading it may pace against):
     /// the work cap, and the clock readings of the budget's `clock_every` and
     /// `clock_every_max` ([`Config::budget`]).
-    pub(super) fn meter<'c, C: Clock + ?Sized>(&self, clock: &'c C) -> Meter<'c, C> {
+    fn meter<'c, C: Clock + ?Sized>(&self, clock: &'c C) -> Meter<'c, C> {
         let (tps, rate) = self.rate;
         let same_clock = tps == clock.ticks_per_second();
         Meter::with_cap(clock, self.cfg.budget.max_work as u64)
@@ -137,7 +137,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// Keeps the rate a call's meter measured for the next call (see [`Planner::meter`]).
-    pub(super) fn keep_rate<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) {
+    fn keep_rate<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, clock: &C) {
         let (tps, (rate, refresh)) = self.rate;
         let same_clock = tps == clock.ticks_per_second();
         let (r, f) = meter.rates();
@@ -148,7 +148,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// Expansions until the call's deadline (set by the caller) or the expansion cap. With
     /// `follow` (the agent, not yet advanced in this call), the agent follows the path as soon
     /// as the goal joins the forward tree; `advanced` tells whether it did.
-    pub(super) fn expand_for<C: Clock + ?Sized>(
+    fn expand_for<C: Clock + ?Sized>(
         &mut self,
         meter: &Meter<'_, C>,
         follow: Option<Point>,
@@ -190,7 +190,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// Sub-budget for a rewiring phase.
-    pub(super) fn slice<C: Clock + ?Sized>(
+    fn slice<C: Clock + ?Sized>(
         &self,
         meter: &Meter<'_, C>,
         budget: core::time::Duration,
@@ -208,7 +208,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     }
 
     /// One expansion of each growing tree and the rewiring after it.
-    pub(super) fn step<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, call: Deadline) {
+    fn step<C: Clock + ?Sized>(&mut self, meter: &Meter<'_, C>, call: Deadline) {
         let env = Env {
             map: &self.map,
             metric: &self.metric,

@@ -43,7 +43,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         Ok(())
     }
 
-    pub(super) fn reflag(&mut self) {
+    fn reflag(&mut self) {
         self.reflag_trees(true);
     }
 
@@ -65,7 +65,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
 
     /// Re-flags every edge of both trees against the obstacles; the rewiring sweeps restart
     /// (where a flag changed, or everywhere with `restart`).
-    pub(super) fn reflag_trees(&mut self, restart: bool) {
+    fn reflag_trees(&mut self, restart: bool) {
         self.stale = false;
         let obstacles = self.map.obstacles();
         for store in [&mut *self.fwd, &mut *self.rev] {
@@ -95,11 +95,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// Re-tests, against the live cells, every edge of both trees whose cells may include one
     /// in `changed` (`[col0, row0, col1, row1]`); the rewiring sweeps restart where a flag
     /// changed. Work: a box test per edge, and the cells of each edge re-tested.
-    pub(super) fn rewall_trees<C: Clock + ?Sized>(
-        &mut self,
-        changed: [u16; 4],
-        meter: &Meter<'_, C>,
-    ) {
+    fn rewall_trees<C: Clock + ?Sized>(&mut self, changed: [u16; 4], meter: &Meter<'_, C>) {
         let cells = self.map.live();
         let grid = cells.grid();
         let inv = 1.0 / grid.cell_size();

@@ -94,7 +94,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// path's segments. Kept only when it shortens the path by a tenth of a cell; the part of
     /// the old edge that `q` keeps is tested too (a rounded point may leave the line).
     /// Returns the new node.
-    pub(super) fn cut_corner<M: Metric, C: Clock + ?Sized, const K: usize>(
+    fn cut_corner<M: Metric, C: Clock + ?Sized, const K: usize>(
         &mut self,
         env: &Env<'_, '_, M, K>,
         x: NodeId,
@@ -150,7 +150,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// largest `d` (bisection) at which they see each other, when the way `a - b` is shorter
     /// than `a - p - b` by a tenth of a cell and the rest of both edges, `a - g` and `b - x`,
     /// is free. The cuts from both sides then pull `a` and `b` round the corner.
-    pub(super) fn split_points<M: Metric, C: Clock + ?Sized, const K: usize>(
+    fn split_points<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
         env: &Env<'_, '_, M, K>,
         px: Point,
@@ -180,7 +180,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// `eye - q` is shorter than `eye - p - q` by a tenth of a cell and `q - end` is free
     /// ([`TreeStore::cut_corner`]). A corner already cut (`eye` sees nothing of the segment
     /// past `p`) costs one test.
-    pub(super) fn cut_point<M: Metric, C: Clock + ?Sized, const K: usize>(
+    fn cut_point<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
         env: &Env<'_, '_, M, K>,
         eye: Point,
