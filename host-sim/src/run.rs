@@ -423,7 +423,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         } else {
             "that follow the map"
         },
-        prep.length_scale(),
+        prep.scenario.length_scale(),
         used.search.e_max,
         used.search_step(),
         used.rewiring.root_step,

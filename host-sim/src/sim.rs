@@ -251,11 +251,6 @@ impl Prepared {
         }
         c.with_sigma(self.scenario.sigma())
     }
-
-    /// The length scale the configurations get on this scenario (1: Table 2's metres).
-    pub fn length_scale(&self) -> f32 {
-        self.scenario.length_scale()
-    }
 }
 
 /// Builds a planner for `prep` and hands it to `f`. `cfg` is what the planner gets, as it is

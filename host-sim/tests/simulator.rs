@@ -1333,7 +1333,7 @@ fn run_lengths_follow_the_map() {
                 c.search.e_search
             );
         }
-        assert!((maze.length_scale() - 0.6).abs() < 1e-6);
+        assert!((maze.scenario.length_scale() - 0.6).abs() < 1e-6);
         assert_eq!(c.search.sigma, sc.sigma(), "the scenario's sigma is kept");
         let spec = if tuned {
             "Bi-AM-RRT*(D) tuned"
@@ -1346,7 +1346,7 @@ fn run_lengths_follow_the_map() {
         sc.paper_lengths = true;
         let maze = Prepared::new(sc);
         assert_eq!(maze.config(named).search.e_max, named.search.e_max);
-        assert_eq!(maze.length_scale(), 1.0);
+        assert_eq!(maze.scenario.length_scale(), 1.0);
     }
 }
 

@@ -10,9 +10,7 @@ use bi_am_rrt::{Circle, Config, Map, Metric, Planner, Point, Status, Storage};
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 
-pub use super::clock;
-
-pub const K: usize = 4;
+pub use super::{K, clock};
 
 pub fn planner<'s, M: Metric, const N: usize, const B: usize>(
     storage: &'s mut Storage<N, B>,

@@ -10,14 +10,12 @@ use bi_am_rrt::{Config, Euclidean, Map, Metric, MetricKind, Planner, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
-pub use super::clock;
 use super::{Geodesic, Protocol, RunResult, drive, landmark_table};
+pub use super::{K, clock};
 
 pub const N: usize = 2048;
 
 pub const B: usize = 1024;
-
-pub const K: usize = 4;
 
 /// The test configuration: the paper's, with a shorter t_exp so runs stay quick.
 pub fn test_config(c: Config, s: &Scenario) -> Config {

@@ -18,6 +18,9 @@ use rand_core::Rng;
 pub mod checked;
 pub mod e2e;
 
+/// Dynamic obstacles a test map holds.
+pub const K: usize = 4;
+
 /// A virtual clock: 1 ns ticks, 30 ns per unit of work, 10 ns per reading.
 pub fn clock() -> FakeClock {
     FakeClock::nanos().with_work_cost(30).with_step(10)
