@@ -11,7 +11,7 @@
 //! Free states come by rejection, bounded by `attempts`; a draw that keeps failing returns
 //! `None` and the expansion is simply skipped.
 //!
-//! The tuned profile also draws, once the goal is in the tree, states in narrow passages of
+//! With `p_gap` (the tuned set) it also draws, once the goal is in the tree, states in narrow passages of
 //! the informed ellipse ([`narrow_free`]: rejection among ellipse draws for a cell with walls on
 //! both sides within a few cells, after the narrow-passage samplers of PRM, e.g. the bridge
 //! test of Hsu et al. 2003, here a direct test of the cell's row and column).

@@ -8,7 +8,7 @@ use std::time::Duration;
 use bi_am_rrt::builtin::{self};
 use bi_am_rrt::map::Circle;
 use bi_am_rrt::metric::DiffusionTable;
-use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Point, Profile, Storage};
+use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Point, Storage};
 use common::e2e::{B, K, N, clock, planner_on, run, test_config};
 use common::{Protocol, drive, landmark_table, path_meets};
 use rand_core::SeedableRng;
@@ -384,9 +384,8 @@ fn connect_joins_the_trees_across_open_space() {
     for connect in [true, false] {
         for seed in 0..10 {
             let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(2.0);
-            if connect {
-                cfg.profile = Profile::Tuned;
-            }
+            // The `connect` tactic alone.
+            cfg.tactics.connect = connect;
             cfg.budget.max_expansions = 1;
             let mut storage = Box::new(Storage::<N, B>::new());
             let mut p: Planner<'_, '_, _, _, N, B, K> = Planner::new(
@@ -538,15 +537,13 @@ fn regression_the_root_moves_before_the_goal_joins() {
 /// neighbourhood inside the ellipse is full, states near the path take the slots of worse
 /// leaves, so the path keeps shortening where the density rule held it (on the reference maps
 /// it held the tuned tree's cost flat between 0.1 s and 1 s of CPU). The tuned parameters
-/// with and without the profile's changes; the 2,048-node arena fills either way.
+/// with and without the `density_trades` tactic alone; the 2,048-node arena fills either way.
 #[test]
 fn density_trades_shorten_the_path() {
     let mut runs = Vec::new();
     for trades in [true, false] {
         let mut cfg = Config::bi_am_rrt(MetricKind::Diffusion).tuned();
-        if !trades {
-            cfg.profile = Profile::Paper;
-        }
+        cfg.tactics.density_trades = trades;
         grown_towards_goal_1(cfg, |p| {
             let cost = p.tree().cost(p.goal_node().unwrap()).unwrap();
             assert!(!cost.blocked);

@@ -166,26 +166,22 @@ fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
         "sigma" => cfg.search.sigma = v.parse()?,
         "as_printed" => cfg.as_printed = parse_as_printed(v)?,
         "profile" => {
-            cfg.profile = match v {
-                "paper" => bi_am_rrt::Profile::Paper,
-                "tuned" => bi_am_rrt::Profile::Tuned,
+            cfg.tactics = match v {
+                "paper" => bi_am_rrt::Tactics::NONE,
+                "tuned" => bi_am_rrt::Tactics::TUNED,
                 _ => return Err(anyhow!("profile {v:?}: paper or tuned")),
             }
         }
-        "steer_fan"
-        | "nearest_step"
-        | "reuse_tests"
-        | "rewire_while_searching"
-        | "connect"
-        | "rewire_new"
-        | "recycle_when_full"
-        | "density_trades"
-        | "corner_cuts" => {
+        "rewire_while_searching" => {
             return Err(anyhow!(
-                "{field:?} is part of the tuned profile since issue 26 (no switch of its own; \
-                 `@profile=paper` turns all of them off; measured one by one in \
-                 docs/performance.md, \"One tuned default\" and \"Corner cuts\")"
+                "\"rewire_while_searching\" is now the tactic \"rewire_after_join\", the other \
+                 way round (`@rewire_after_join=false` rewires while searching)"
             ));
+        }
+        t if bi_am_rrt::Tactics::NAMES.contains(&t) => {
+            if let Some(on) = cfg.tactics.get_mut(t) {
+                *on = v.parse()?;
+            }
         }
         _ => return Err(anyhow!("unknown field {field:?}")),
     }

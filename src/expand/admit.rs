@@ -1,5 +1,5 @@
 //! What a full arena does with a new state (beyond the paper, which stops growing): the
-//! trades of the tuned profile and the recycling of a leaf while the goal is not joined;
+//! trades (`density_trades`, `recycle_when_full`) and the recycling of a leaf while the goal is not joined;
 //! the module's bullet "A full arena makes room".
 
 use super::*;
@@ -10,7 +10,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// room: one not joined yet (promise: a goal that can be reached joins) or joined over a
     /// path that crosses a dynamic obstacle (the tree must grow a way around). Once a free
     /// path exists, a full tree rewires what it has, unless `trade` gives the new state's cost
-    /// bound: then a leaf with a higher bound makes room (the tuned profile). Sets
+    /// bound: then a leaf with a higher bound makes room (`recycle_when_full`). Sets
     /// `full` when the arena was full.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn insert_making_room<R: Rng + ?Sized, C: Clock + ?Sized>(
@@ -151,7 +151,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// The leaf of `near` (not the root, not `goal_node`, not one of the last `cover` nodes of
     /// its index bucket) with the highest cost bound `Cost(x) + d_E(x, goal)`, with that
     /// bound, when it is above the best bound `x` could have below any node of `near`
-    /// (tuned profile).
+    /// (`density_trades`).
     pub(super) fn worst_leaf<C: Clock + ?Sized>(
         &self,
         near: &Near,

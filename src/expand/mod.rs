@@ -11,17 +11,17 @@
 //!   samples almost never reach; only on maps whose cells are at most `e_max / 16`). When the
 //!   nearest node's step towards such a sample is blocked, the sample itself is the new state
 //!   (below a neighbour that sees it, or nothing): steering would put it outside the passage.
-//! - RRT-Connect's greedy step (`TreeStore::connect`, tuned profile): the planner makes the
+//! - RRT-Connect's greedy step (`TreeStore::connect`, the `connect` tactic): the planner makes the
 //!   other tree walk straight towards a new node that met nothing within `sigma`.
 //! - `Nearest(T, x)`: the Euclidean-nearest node when the segment to it is free or the metric
 //!   is Euclidean; otherwise the node nearest by the assisting metric (a scan of the tree; the
-//!   Euclidean nearest if the metric cannot place `x`). In the tuned profile only the
+//!   Euclidean nearest if the metric cannot place `x`). With `nearest_step` only the
 //!   steering step towards `x` is tested, and the steering takes that step, and the parent
 //!   choice that segment, without testing them again.
 //! - Steering: a step of at most `e_max` along the segment when it is free (`e_search` instead
 //!   while the tree's goal is not in it, when a tuned configuration sets it). Otherwise AM-RRT*
 //!   with a non-Euclidean metric draws `steer_candidates` states in the disc of radius
-//!   `min(e_max, d_E)` around the nearest node (independently, or in the tuned profile spread
+//!   `min(e_max, d_E)` around the nearest node (independently, or with `steer_fan` spread
 //!   evenly in angle, [`crate::geometry::DiscFan`]) and keeps the free one closest to the sample by
 //!   the metric (a fixed number of candidates instead of the reference's fixed 2 ms, so a fast
 //!   implementation does not pay milliseconds per sample; candidates are ranked by the metric
@@ -29,9 +29,10 @@
 //!   tests); AM-RRT*(E) steps towards the first
 //!   obstacle and stops short of it (bisection of the free prefix); RT-RRT* gives up.
 //! - The node is added when the neighbourhood holds fewer than `n_max` nodes, or the sample was
-//!   farther than `e_max` from its nearest node, or the new state is the goal. In the tuned
-//!   profile, a node added inside the informed ellipse then offers itself as parent to its
-//!   neighbours, as RRT* does, and a state the rule turns away inside the ellipse instead takes the slot of the neighbourhood's leaf
+//!   farther than `e_max` from its nearest node, or the new state is the goal. With
+//!   `rewire_new`, a node added inside the informed ellipse then offers itself as parent to
+//!   its neighbours, as RRT* does; with `density_trades`, a state the rule turns away inside
+//!   the ellipse instead takes the slot of the neighbourhood's leaf
 //!   with the highest `Cost(x) + d_E(x, goal)` when that is above the new state's own bound:
 //!   the nodes move to where they can shorten the path, and since a neighbourhood's bounds
 //!   only decrease, trades cannot cycle.
@@ -74,7 +75,7 @@ use crate::slots::{sat_u32, sort_small_by, to_u16, units};
 use crate::tree::{Cost, Edge, NodeId, Tree, charged};
 use rand_core::Rng;
 
-/// Most nodes one greedy connection (RRT-Connect's step, tuned profile) adds.
+/// Most nodes one greedy connection (RRT-Connect's step, the `connect` tactic) adds.
 pub const CONNECT_STEPS: usize = 32;
 
 /// States turned away by the density rule in a row, while a tree's goal is not in it, after
@@ -106,7 +107,7 @@ const STEER_BATCH: usize = 32;
 /// [`STEER_BATCH`] as a candidate count.
 const STEER_BATCH_U16: u16 = 32;
 
-/// What a new state offers a full arena (the tuned profile): a leaf may give up
+/// What a new state offers a full arena (`recycle_when_full`): a leaf may give up
 /// its slot when its cost bound is above `bound` and at least `cover` other nodes (capped by
 /// [`TreeStore::cover`]) share its index bucket ([`crate::config::Memory::recycle_cover`]).
 pub(crate) struct Trade {
@@ -272,7 +273,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// `Nearest(T, x)`, and whether the step of length `step` from it towards `x` is known to
-    /// be free: with `step` (the tuned profile) the Euclidean-nearest node's view
+    /// be free: with `step` (`nearest_step`) the Euclidean-nearest node's view
     /// is tested over that step only (module docs).
     fn nearest_for_step<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -325,7 +326,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     }
 
     /// Steers from node `from` towards `x` (module docs); `None` when no state can be reached.
-    /// `step_free`: the straight step was already tested free (tuned profile).
+    /// `step_free`: the straight step was already tested free (`reuse_tests`).
     #[allow(clippy::too_many_arguments)]
     fn steer<M: Metric, R: Rng + ?Sized, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -372,8 +373,8 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let mut left = env.cfg.search.steer_candidates;
         let mut fan = env
             .cfg
-            .profile
-            .is_tuned()
+            .tactics
+            .steer_fan
             .then(|| DiscFan::new(rng, a, radius, env.cfg.search.steer_candidates));
         while left > 0 {
             let n = left.min(STEER_BATCH_U16);
@@ -520,7 +521,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         full: &mut bool,
     ) -> Option<(NodeId, bool)> {
         let cfg = env.cfg;
-        let tuned = cfg.profile.is_tuned();
+        let t = cfg.tactics;
         let view = target.as_deref().map(|t| self.goal_view(env, t, meter));
         let beacon = match (target.as_deref(), &view) {
             (Some(t), Some(v)) if v.ellipse.is_some() => self.beacon_sample(env, rng, t, meter),
@@ -557,10 +558,11 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         } else {
             cfg.search.e_max
         };
-        // Tuned: `Nearest` tests its Euclidean choice over the step only, and no segment is
-        // tested twice in an expansion (the steering's step, the parent's segment).
+        // `nearest_step`: `Nearest` tests its Euclidean choice over the step only; with
+        // `reuse_tests` no segment is tested twice in an expansion (the steering's step, the
+        // parent's segment).
         let (x_nearest, step_free) =
-            self.nearest_for_step(env, x_rand, tuned.then_some(step), meter)?;
+            self.nearest_for_step(env, x_rand, t.nearest_step.then_some(step), meter)?;
         if meter.expired(&env.call) {
             return None;
         }
@@ -571,7 +573,15 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let x_new = if direct {
             x_rand
         } else {
-            self.steer(env, rng, x_nearest, x_rand, step, step_free && tuned, meter)?
+            self.steer(
+                env,
+                rng,
+                x_nearest,
+                x_rand,
+                step,
+                step_free && t.reuse_tests,
+                meter,
+            )?
         };
         if meter.expired(&env.call) {
             return None;
@@ -610,12 +620,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let room = found < n_max as usize || far_sample || is_goal;
         let by_hole = hole && !room;
         let dense = !room && !hole;
-        // A dense neighbourhood inside the ellipse may still trade (tuned): its worst leaf
-        // for a state that bounds a shorter path.
+        // A dense neighbourhood inside the ellipse may still trade (`density_trades`): its
+        // worst leaf for a state that bounds a shorter path.
         let swap = match (&view, target.as_deref()) {
-            (Some(v), Some(t)) if dense && informed && tuned => {
+            (Some(v), Some(tg)) if dense && informed && t.density_trades => {
                 let cover = self.cover(cfg.memory.recycle_cover);
-                self.worst_leaf(&near, x_new, v.goal, t.node, cover, meter)
+                self.worst_leaf(&near, x_new, v.goal, tg.node, cover, meter)
             }
             _ => None,
         };
@@ -635,7 +645,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         } else {
             keep_candidate(&mut near, x_nearest);
             // The steering's segment from x_nearest is known free.
-            tuned.then_some(x_nearest)
+            t.reuse_tests.then_some(x_nearest)
         };
         let (parent, edge) = self.best_parent(env, x_new, &mut near, seen, meter)?;
         // The new state's cost bound below `parent`: a lower bound of a path through it.
@@ -660,9 +670,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 }
                 self.insert(x_new, keep[0], edge).ok()?
             }
-            // A full tree may trade a leaf for a state that can shorten the path (tuned).
+            // A full tree may trade a leaf for a state that can shorten the path
+            // (`recycle_when_full`).
             (_, _, target) => {
-                let trade = (tuned && informed).then(|| Trade {
+                let trade = (t.recycle_when_full && informed).then(|| Trade {
                     bound: bound(self, view.as_ref().map_or(x_new, |v| v.goal)),
                     cover: cfg.memory.recycle_cover,
                 });
@@ -670,10 +681,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             }
         };
         // RRT*'s rewiring around the new node: each neighbour takes it as parent when that is
-        // cheaper over a free segment (tuned configurations, inside the informed ellipse). A
+        // cheaper over a free segment (`rewire_new`, inside the informed ellipse). A
         // trade may have renamed one of `near`'s ids; `try_rewire` checks cost and segment of
         // whatever node an id now names, so that is at worst a wasted test.
-        if tuned && informed {
+        if t.rewire_new && informed {
             for &nb in near.iter() {
                 if meter.expired(&env.call) {
                     break;
@@ -692,7 +703,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         Some((id, is_goal))
     }
 
-    /// RRT-Connect's greedy step (tuned profile): from the node nearest `x`, straight
+    /// RRT-Connect's greedy step (the `connect` tactic): from the node nearest `x`, straight
     /// steps of at most `step` towards `x`, each added below the last when its segment is free,
     /// until a node within `step` of `x` sees it over a free segment (returned), or a step is
     /// blocked, the arena is full or [`CONNECT_STEPS`] nodes were added (`None`; the nodes

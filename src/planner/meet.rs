@@ -1,12 +1,12 @@
 //! Meet and graft of the two trees (paper Algorithm 1's bidirectional search, section 3.3),
-//! and, in the tuned profile, RRT-Connect's greedy step; the module's "Meet and graft".
+//! and, with the `connect` tactic, RRT-Connect's greedy step; the module's "Meet and graft".
 
 use super::*;
 
 impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     Planner<'s, 'm, M, R, N, B, K>
 {
-    /// Tuned profile: the other tree walks straight towards node `new` of one tree (`forward`
+    /// The `connect` tactic: the other tree walks straight towards node `new` of one tree (`forward`
     /// tells which), and the two are grafted when it reaches it (module docs). `blocked`:
     /// nodes of the other tree whose segment to `new` the meet test found blocked (not
     /// tested again).
@@ -17,7 +17,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         blocked: &[NodeId],
         meter: &Meter<'_, C>,
     ) {
-        if !self.cfg.profile.is_tuned() {
+        if !self.cfg.tactics.connect {
             return;
         }
         let env = Env {

@@ -12,7 +12,7 @@
 //! rewiring for `t_goal` instead. While the goal is not in
 //! the forward tree and bidirectional search is on, each step also expands the reverse tree
 //! (rooted at the goal, growing towards the agent's position when the goal was set) and
-//! rewires it from its root. With `rewire_while_searching` off (tuned), neither tree rewires
+//! rewires it from its root. With `rewire_after_join` ([`crate::Tactics`]), neither tree rewires
 //! from its root until the goal has joined.
 //!
 //! Following the agent: the path is read from the root to the goal (or, before the goal
@@ -41,7 +41,7 @@
 //! tested for a free segment in cost order, and the first free one is taken. The reverse tree's
 //! trunk (from `b` to the goal) is then grafted below `a`, each edge keeping its blocked flag,
 //! so the goal joins the forward tree; the reverse tree is emptied and search continues with the
-//! forward tree alone. In the tuned profile, a node that meets nothing within `sigma` (no free
+//! forward tree alone. With the `connect` tactic, a node that meets nothing within `sigma` (no free
 //! pair, or a refused graft) makes the other tree walk straight towards it from its nearest
 //! node (not one whose segment the meet test already found blocked), in free steps of
 //! `e_search` (RRT-Connect's greedy step, at most 32 nodes); reaching it is a meet. With

@@ -48,12 +48,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
     /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N)
     /// and a bounded number of segment tests (`sample_attempts`, `steer_candidates`, 64
-    /// parent candidates, and in the tuned profile the greedy connection's up to 32 steps),
+    /// parent candidates, and with `connect` the greedy connection's up to 32 steps),
     /// each `2 + 2 e / cell` units at most (`e` the longer of `e_max` and `e_search`; a meet,
     /// connect or shortcut segment at most `2 + (width + height) / cell`; with a robot body of
     /// radius `r`, a test near a wall also charges its exact stage, a unit per row of a band
-    /// `2 r / cell + 1` cells wide and per occupied cell it measures), in the tuned
-    /// profile up to 64 rewires around the new node, and with `path_shortcuts` that many
+    /// `2 r / cell + 1` cells wide and per occupied cell it measures), with `rewire_new`
+    /// up to 64 rewires around the new node, and with `path_shortcuts` that many
     /// rewires on the path; a rewiring visit tests at
     /// most 64 neighbours, each rewire charging the subtree it moves (at most N). With
     /// obstacle updates submitted since the last call, the call starts by re-flagging both
@@ -236,9 +236,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call,
         };
         let searching = self.goal.is_some_and(|g| g.node.is_none());
-        // Tuned: no root rewiring before the goal joins (the same first paths, less work).
-        let tuned = self.cfg.profile.is_tuned();
-        if !tuned || !searching {
+        // `rewire_after_join`: no root rewiring before the goal joins (the same first paths,
+        // less work).
+        let after_join = self.cfg.tactics.rewire_after_join;
+        if !after_join || !searching {
             let slice = self.slice(meter, self.cfg.rewiring.t_root, call);
             self.fwd
                 .rewire_root(&env, slice, self.cfg.new_rewiring, meter);
@@ -274,7 +275,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             {
                 self.connect(b, false, &blocked, meter);
             }
-            if self.rev_goal.is_some() && !tuned {
+            if self.rev_goal.is_some() && !after_join {
                 let env = Env {
                     map: &self.map,
                     metric: &self.metric,

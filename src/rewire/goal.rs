@@ -20,7 +20,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let mut near = Near::new();
         let mut frontier = Near::new();
         let to_goal = env.metric.prepare(goal.pos);
-        let tuned = env.cfg.profile.is_tuned();
+        let open = env.cfg.tactics.open_frontier;
         for _ in 0..slice.visits {
             if meter.expired(&slice.deadline) {
                 return;
@@ -98,10 +98,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     continue;
                 }
                 self.try_rewire_via(env, parent, x_near, via, printed_cost, meter);
-                // The tuned profile enqueues every unseen neighbour, as root rewiring does:
-                // no segment test for the frontier (the rewire above tests its own).
+                // `open_frontier` enqueues every unseen neighbour, as root rewiring does: no
+                // segment test for the frontier (the rewire above tests its own).
                 if !self.tree.marked(x_near, Mark::Goal)
-                    && (printed_cost || tuned || env.free(seen_from, self.pos(x_near), meter))
+                    && (printed_cost || open || env.free(seen_from, self.pos(x_near), meter))
                     && frontier.push(x_near).is_ok()
                 {
                     self.tree.mark(x_near, Mark::Goal);

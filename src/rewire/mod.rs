@@ -18,7 +18,7 @@
 //! - **Goal rewiring, first kind** (AM-RRT*): a stack (current branch) and a queue (next
 //!   branches) sweep from the root towards the goal inside the informed ellipse. A node `x`
 //!   offers itself as parent to its neighbours, visited in order of decreasing `d_A(., goal)`;
-//!   unseen neighbours with a free segment (in the tuned profile: all unseen neighbours, as
+//!   unseen neighbours with a free segment (with `open_frontier`: all unseen neighbours, as
 //!   root rewiring enqueues them, issue 26) form the frontier, pushed on the stack (the one
 //!   nearest the goal by the metric on top) and enqueued (first in, first out, as the paper's
 //!   Enqueue and Dequeue; it was last in, first out until issue 24). When the stack's top is
@@ -50,7 +50,7 @@
 //! - **Path shortcuts** (tuned, [`crate::config::Rewiring::path_shortcuts`]; not in the
 //!   paper): a cursor walks the path from the goal towards the root, a few nodes per
 //!   expansion, and offers each node its grandparent as parent (Theta*'s any-angle step, Nash
-//!   et al. 2007): the path straightens between the tree's corner nodes. In the tuned profile
+//!   et al. 2007): the path straightens between the tree's corner nodes. With `corner_cuts`
 //!   a node whose grandparent is hidden round a corner makes a **corner cut** (issue 26):
 //!   the farthest point of its parent's edge that it sees, or of its own edge that the
 //!   grandparent sees, becomes a new node and its parent, or, when neither end sees past the

@@ -72,10 +72,10 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 continue;
             };
             // The grandparent as parent when that is shorter and `x` sees it; when it is
-            // hidden, a corner cut (tuned; the cursor goes on from the cut's new node).
+            // hidden, a corner cut (`corner_cuts`; the cursor goes on from the cut's new node).
             x = match self.rewire(env, grand, x, None, false, meter) {
                 Ok(()) => x,
-                Err(Refused::Hidden) if env.cfg.profile.is_tuned() => self
+                Err(Refused::Hidden) if env.cfg.tactics.corner_cuts => self
                     .cut_corner(env, x, parent, grand, meter)
                     .unwrap_or(parent),
                 Err(_) => parent,
@@ -84,7 +84,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         self.shortcut_at = Some(x);
     }
 
-    /// A corner cut (tuned profile, module docs): `x` cannot see its
+    /// A corner cut (the `corner_cuts` tactic, module docs): `x` cannot see its
     /// grandparent `g` round its parent `p`. A point `q` of one of the two edges at `p`
     /// becomes a new node below `g` and the parent of `x`: first the farthest point of `p - g`
     /// that `x` sees, else the farthest point of `p - x` that `g` sees (bisection from `p`,

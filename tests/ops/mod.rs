@@ -162,11 +162,16 @@ fn run_with<M: Metric>(
     cfg.budget.t_exp = Duration::from_micros(1 + b.u16() as u64 * 4);
     cfg.budget.max_work = 2_000 + b.u16() as u32 * 2;
     cfg.budget.max_expansions = 1 + b.u8() as u32 * 4;
-    // One byte of switches: the profile (the tuned one's changes have no switches of their
-    // own), then the tuned set's parameters one by one.
+    // One byte of switches: the tactics (then each one by one from two more bytes), then
+    // the tuned set's parameters one by one.
     let flags = b.u8();
     if flags & 1 != 0 {
-        cfg.profile = bi_am_rrt::Profile::Tuned;
+        let bits = b.u16();
+        for (i, name) in bi_am_rrt::Tactics::NAMES.iter().enumerate() {
+            if let Some(on) = cfg.tactics.get_mut(name) {
+                *on = bits & (1 << i) != 0;
+            }
+        }
     }
     if flags & 2 != 0 {
         cfg.memory.recycle_cover = (flags >> 2) as u16 % 4;

@@ -7,6 +7,9 @@ use core::time::Duration;
 
 use crate::error::ConfigError;
 
+mod tactics;
+pub use tactics::Tactics;
+
 /// The base real-time planner.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -143,45 +146,6 @@ impl AsPrinted {
     }
 }
 
-/// Which planner a configuration runs: the paper's, or the tuned one. Both run the same
-/// algorithm (Algorithms 1-6 with the switches of Table 1); the tuned profile adds the
-/// engineering changes that won in every measurement (`docs/performance.md`, "One tuned
-/// default"), which have no switch of their own:
-/// - the steering candidates spread evenly in angle ([`crate::geometry::DiscFan`]) instead of
-///   independent draws in the disc;
-/// - `Nearest` tests the Euclidean-nearest node's view of the sample over the steering step
-///   only, not the whole way;
-/// - a segment tested in an expansion is not tested again in it (same decisions, less work);
-/// - no root rewiring before the goal joins (the same first paths, less work);
-/// - RRT-Connect's greedy step between the two trees while searching (Kuffner and LaValle);
-/// - a node added inside the informed ellipse rewires its neighbours (RRT*'s step);
-/// - with [`Rewiring::path_shortcuts`], a path node whose grandparent is hidden round a
-///   corner takes a new node on one of its two edges as parent, or its parent splits in two,
-///   one point on each edge (corner cuts, module `rewire`): the path closes in on the
-///   obstacles' corners as a path simplifier's does;
-/// - a neighbourhood inside the ellipse that the density rule holds trades its worst leaf
-///   for a state that bounds a shorter path, and a full arena trades leaves that cannot
-///   improve the path for states that can ([`Memory::recycle_cover`] keeps a cover);
-/// - the goal-rewiring sweep enqueues every unseen neighbour, as root rewiring does, without a
-///   segment test for the frontier (each rewire still tests its own segment): a quarter more
-///   expansions on a fine map, where that test was most of the sweep's work.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Profile {
-    /// The paper's algorithm with its Table 2 parameters (the named constructors).
-    Paper,
-    /// [`Config::tuned`] (the default): the engineering changes above and the parameters
-    /// listed there, measured in `docs/performance.md`.
-    Tuned,
-}
-
-impl Profile {
-    /// Whether the tuned profile's changes run.
-    pub const fn is_tuned(self) -> bool {
-        matches!(self, Self::Tuned)
-    }
-}
-
 /// Growth: sampling, steering and the meeting of the two trees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -285,8 +249,8 @@ pub struct Memory {
     /// Density limit for new states inside the informed ellipse once the goal is in the tree
     /// (where a node can still shorten the path); 0 = `n_max` everywhere (the paper).
     pub n_max_informed: u16,
-    /// Tuned profile: a leaf is traded (full arena, or a neighbourhood the density rule
-    /// holds) only while at least this many other nodes share its spatial-index bucket
+    /// With `density_trades` or `recycle_when_full` ([`Tactics`]): a leaf is traded (full
+    /// arena, or a neighbourhood the density rule holds) only while at least this many other nodes share its spatial-index bucket
     /// (about `e_max` square), so every part of the map the tree has reached keeps that many
     /// nodes for the goals that come next instead of giving them all to the current path; 0 =
     /// no such rule. Capped at `N / (2 x buckets)` so the cover holds at most half the arena
@@ -329,7 +293,7 @@ impl Motion {
 }
 
 /// Everything that configures a planner, on one screen: which planner (Table 1's two
-/// switches on a base and a metric, and the profile), then four groups of parameters.
+/// switches on a base and a metric, and the tactics), then four groups of parameters.
 /// [`Config::default`] is the tuned Bi-AM-RRT*(D); [`Config::paper`] the paper's, and
 /// [`Config::table1`] all 20 of the paper's planners. Fit the lengths to a map with
 /// [`Config::for_grid`].
@@ -345,8 +309,8 @@ pub struct Config {
     /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`). On RT-RRT*
     /// only Algorithm 4 applies (it has no goal rewiring).
     pub new_rewiring: bool,
-    /// The paper's planner or the tuned one (names and reports say which).
-    pub profile: Profile,
+    /// The tuned planner's tactics ([`Tactics`]; the paper's planner: none).
+    pub tactics: Tactics,
     /// Sampling, steering, meeting.
     pub search: Search,
     /// Rewiring and the root.
@@ -355,7 +319,7 @@ pub struct Config {
     pub budget: Budget,
     /// The density rule and trades.
     pub memory: Memory,
-    /// Which parts of Algorithms 4-6 run as printed ([`AsPrinted`]; both profiles: none).
+    /// Which parts of Algorithms 4-6 run as printed ([`AsPrinted`]; both named sets: none).
     pub as_printed: AsPrinted,
     /// How the agent and the obstacles move ([`Motion::NONE`] unless stated).
     pub motion: Motion,
@@ -393,7 +357,7 @@ impl Config {
             metric,
             bidirectional: false,
             new_rewiring: false,
-            profile: Profile::Paper,
+            tactics: Tactics::NONE,
             search: Search {
                 e_max: 5.0,
                 e_search: 0.0,
@@ -432,13 +396,13 @@ impl Config {
     }
 
     /// The paper's proposal, Bi-AM-RRT*(D) with Table 2's parameters (labelled as the
-    /// paper's: [`Profile::Paper`]).
+    /// paper's: no [`Tactics`]).
     pub const fn paper() -> Self {
         Self::bi_am_rrt(MetricKind::Diffusion)
     }
 
     /// The tuned version of a configuration: the same planner (base, metric, Table 1's
-    /// switches) with the tuned profile's changes ([`Profile`]) and these parameters,
+    /// switches) with every tactic on ([`Tactics::TUNED`]) and these parameters,
     /// measured against the paper's (`docs/performance.md`):
     /// - `clock_every` 256 and `clock_every_max` 8,192: the deadlines read the clock at most
     ///   every 256 work units instead of 50-80 times per expansion, and the readings are paced
@@ -465,7 +429,7 @@ impl Config {
     ///   at a time along the long edges the shortcuts make, only along a path to the goal,
     ///   and takes the path's node after next as child first when that is shorter.
     pub const fn tuned(mut self) -> Self {
-        self.profile = Profile::Tuned;
+        self.tactics = Tactics::TUNED;
         self.budget.clock_every = 256;
         self.budget.clock_every_max = 8192;
         self.rewiring.mode = RewireMode::PerExpansion { visits: 4 };
@@ -708,8 +672,15 @@ impl fmt::Display for PlannerName {
         if !both && c.new_rewiring {
             f.write_str("-2")?;
         }
-        if c.profile == Profile::Tuned {
+        if c.tactics == Tactics::TUNED {
             f.write_str(" tuned")?;
+        } else if c.tactics != Tactics::NONE {
+            // Some tactics: named one by one, so the name says what runs.
+            for (name, on) in Tactics::NAMES.iter().zip(c.tactics.as_array()) {
+                if on {
+                    write!(f, " +{name}")?;
+                }
+            }
         }
         Ok(())
     }
@@ -736,109 +707,4 @@ impl PartialEq<&str> for PlannerName {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn table1_names() {
-        let names: [&str; 20] = [
-            "RT-RRT*",
-            "RT-RRT*(D)",
-            "AM-RRT*(E)",
-            "AM-RRT*(D)",
-            "AM-RRT*(G)",
-            "RT-RRT*-1",
-            "RT-RRT*(D)-1",
-            "AM-RRT*(E)-1",
-            "AM-RRT*(D)-1",
-            "AM-RRT*(G)-1",
-            "RT-RRT*-2",
-            "RT-RRT*(D)-2",
-            "AM-RRT*(E)-2",
-            "AM-RRT*(D)-2",
-            "AM-RRT*(G)-2",
-            "Bi-RT-RRT*",
-            "Bi-RT-RRT*(D)",
-            "Bi-AM-RRT*(E)",
-            "Bi-AM-RRT*(D)",
-            "Bi-AM-RRT*(G)",
-        ];
-        for (c, n) in Config::table1().iter().zip(names) {
-            assert!(c.name() == n, "{n}");
-            assert_eq!(Config::from_name(n), Some(*c));
-        }
-        assert_eq!(
-            Config::from_name("Bi-AM-RRT*(D)"),
-            Some(Config::bi_am_rrt(MetricKind::Diffusion))
-        );
-        assert!(Config::from_name("Bi-AM-RRT*").is_none());
-        let tuned = Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
-        assert_eq!(tuned, Config::bi_am_rrt(MetricKind::Diffusion).tuned());
-        assert_eq!(tuned.profile, Profile::Tuned);
-        assert_eq!(tuned.validate(), Ok(()));
-        assert!(Config::from_name("AM-RRT*(D)-12").is_none());
-    }
-
-    #[test]
-    fn lengths_follow_the_map_and_keep_table_2_on_the_papers() {
-        for c in Config::table1()
-            .into_iter()
-            .chain(Config::table1().map(Config::tuned))
-        {
-            // The paper's maps: 100 m and 200 m at 1 m cells, bit for bit.
-            for side in [100.0, 150.0, 200.0] {
-                assert_eq!(c.for_map(side, side, 1.0), c, "{}", c.name());
-            }
-            // A 20 m map at 0.05 m: a fifth of every length.
-            let f = c.for_map(20.0, 15.0, 0.05);
-            assert!((f.search.e_max - c.search.e_max * 0.2).abs() < 1e-6);
-            assert!((f.search.sigma - c.search.sigma * 0.2).abs() < 1e-5);
-            assert!((f.search.e_search - c.search.e_search * 0.2).abs() < 1e-5);
-            assert!((f.rewiring.root_step - c.rewiring.root_step * 0.2).abs() < 1e-6);
-            assert_eq!(f.validate(), Ok(()));
-            // 400 m: twice; a tiny coarse map keeps steps of 4 cells.
-            assert_eq!(
-                c.for_map(400.0, 100.0, 1.0).search.e_max,
-                c.search.e_max * 2.0
-            );
-            assert_eq!(c.for_map(8.0, 8.0, 0.5).search.e_max, 2.0);
-        }
-        assert_eq!(length_scale(f32::NAN), 1.0);
-        assert_eq!(length_scale(50.0), 0.5);
-    }
-
-    /// Issue 7, case 7: NaN or negative `e_max`, `sigma`, zero budgets and `p_goal > 1` were
-    /// accepted and gave a planner that silently never grew.
-    #[test]
-    fn regression_silent_misconfiguration_is_refused() {
-        for c in Config::table1() {
-            assert_eq!(c.validate(), Ok(()));
-        }
-        let base = Config::bi_am_rrt(MetricKind::Diffusion);
-        type Case = (fn(&mut Config), ConfigError);
-        let cases: [Case; 14] = [
-            (|c| c.search.e_max = f32::NAN, ConfigError::EMax),
-            (|c| c.search.e_max = -1.0, ConfigError::EMax),
-            (|c| c.search.e_max = f32::INFINITY, ConfigError::EMax),
-            (|c| c.search.sigma = f32::NAN, ConfigError::Sigma),
-            (|c| c.search.sigma = -3.0, ConfigError::Sigma),
-            (|c| c.budget.t_exp = Duration::ZERO, ConfigError::TExp),
-            (|c| c.search.p_goal = 1.5, ConfigError::PGoal),
-            (|c| c.search.p_beacon = f32::NAN, ConfigError::PBeacon),
-            (|c| c.search.p_gap = -0.1, ConfigError::PGap),
-            (|c| c.search.p_uniform = f32::NAN, ConfigError::PUniform),
-            (|c| c.memory.n_max = 0, ConfigError::NMax),
-            (
-                |c| c.search.sample_attempts = 0,
-                ConfigError::SampleAttempts,
-            ),
-            (|c| c.budget.max_expansions = 0, ConfigError::MaxExpansions),
-            (|c| c.budget.max_work = 0, ConfigError::MaxWork),
-        ];
-        for (set, want) in cases {
-            let mut c = base;
-            set(&mut c);
-            assert_eq!(c.validate(), Err(want));
-        }
-    }
-}
+mod tests;
