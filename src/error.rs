@@ -78,45 +78,57 @@ error_enum! {
     }
 }
 
-error_enum! {
-    /// A [`crate::Config`] field out of range (named by the variant).
-    pub enum ConfigError {
-        /// `t_exp` is zero: no call would ever plan.
-        TExp => "t_exp must be longer than zero",
-        /// `e_max` is not finite and positive.
-        EMax => "e_max must be finite and positive",
-        /// `n_max` is zero.
-        NMax => "n_max must be at least 1",
-        /// `sigma` is NaN, infinite or negative.
-        Sigma => "sigma must be finite and not negative",
-        /// `e_search` is NaN, infinite or negative.
-        ESearch => "e_search must be finite and not negative",
-        /// `root_step` is NaN, infinite or negative.
-        RootStep => "root_step must be finite and not negative",
-        /// `steer_candidates` is zero.
-        SteerCandidates => "steer_candidates must be at least 1",
-        /// `sample_attempts` is zero.
-        SampleAttempts => "sample_attempts must be at least 1",
-        /// `max_expansions_per_call` is zero.
-        MaxExpansions => "max_expansions_per_call must be at least 1",
-        /// `max_work_per_call` is zero.
-        MaxWork => "max_work_per_call must be at least 1",
-        /// `p_goal` is outside `[0, 1]` or NaN.
-        PGoal => "p_goal must lie in [0, 1]",
-        /// `p_uniform` is outside `[0, 1]` or NaN.
-        PUniform => "p_uniform must lie in [0, 1]",
-        /// `p_beacon` is outside `[0, 1]` or NaN.
-        PBeacon => "p_beacon must lie in [0, 1]",
-        /// `p_gap` is outside `[0, 1]` or NaN.
-        PGap => "p_gap must lie in [0, 1]",
-        /// A [`crate::config::Motion`] field is NaN, infinite or negative.
-        Motion => "the motion's speeds, period and horizon must be finite and not negative",
-        /// `robot_radius` is NaN, infinite or negative.
-        RobotRadius => "robot_radius must be finite and not negative",
-        /// `clearance_weight` is NaN, infinite or negative.
-        ClearanceWeight => "clearance_weight must be finite and not negative",
+/// The rule a configuration value keeps (each value's rule is in the parameter table,
+/// [`crate::config::PARAMS`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Rule {
+    /// Any value of its type.
+    Any,
+    /// A number: finite and above zero.
+    Positive,
+    /// A number: finite and not below zero.
+    NonNegative,
+    /// A count: 1 or more.
+    AtLeastOne,
+    /// A probability: in `[0, 1]` (not NaN).
+    Unit,
+    /// A duration: longer than zero.
+    NonZero,
+}
+
+impl Rule {
+    /// The rule in words, as error messages and the configuration reference give it.
+    pub const fn text(self) -> &'static str {
+        match self {
+            Self::Any => "any value",
+            Self::Positive => "finite and positive",
+            Self::NonNegative => "finite and not negative",
+            Self::AtLeastOne => "at least 1",
+            Self::Unit => "in [0, 1]",
+            Self::NonZero => "longer than zero",
+        }
     }
 }
+
+/// A [`crate::Config`] value out of range: its name in the parameter table
+/// ([`crate::config::PARAMS`]) and the rule it breaks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ConfigError {
+    /// The value's name (`"e_max"`, `"p_goal"`, ...).
+    pub param: &'static str,
+    /// The rule it breaks.
+    pub rule: Rule,
+}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{} must be {}", self.param, self.rule.text())
+    }
+}
+
+impl core::error::Error for ConfigError {}
 
 /// Why a planner could not be made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

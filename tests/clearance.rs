@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use bi_am_rrt::clearance::clearance_field;
 use bi_am_rrt::clock::FakeClock;
-use bi_am_rrt::error::{ConfigError, MapError, SetupError};
+use bi_am_rrt::error::{ConfigError, MapError, Rule, SetupError};
 use bi_am_rrt::map::pack_grid;
 use bi_am_rrt::tree::{Edge, Tree, charged};
 use bi_am_rrt::{Config, Euclidean, Map, OccupancyGrid, Planner, Point, Storage};
@@ -223,10 +223,14 @@ fn bad_input_is_named() {
     let mut storage = Box::new(Storage::<1024, 64>::new());
     let start = Point::new(8.0, 5.0);
     // A weight without a field would do nothing: refused, and so is a bad weight.
+    const WEIGHT: ConfigError = ConfigError {
+        param: "clearance_weight",
+        rule: Rule::NonNegative,
+    };
     for (w, want) in [
         (1.0, SetupError::Clearance),
-        (f32::NAN, SetupError::Config(ConfigError::ClearanceWeight)),
-        (-1.0, SetupError::Config(ConfigError::ClearanceWeight)),
+        (f32::NAN, SetupError::Config(WEIGHT)),
+        (-1.0, SetupError::Config(WEIGHT)),
     ] {
         let mut cfg = Config::default().for_grid(&grid);
         cfg.clearance_weight = w;

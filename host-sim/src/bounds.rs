@@ -1,6 +1,6 @@
 //! Work per call with a clock that never advances (promise 3, issue 7): the planner at the
 //! start of a scenario's first leg, `plan` called again and again with a frozen clock, so only
-//! the per-call work cap (`Config::max_work_per_call`) and the expansion cap end each call.
+//! the per-call work cap (`Budget::max_work`) and the expansion cap end each call.
 //! Reports the work units and the thread CPU time of the calls, for two arena sizes and both
 //! rewiring modes.
 

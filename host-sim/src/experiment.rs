@@ -134,6 +134,10 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
             "{:?} {:?} coarsen {} max_bytes {}",
             t.kind, t.layout, t.coarsen, t.max_bytes
         ),
+        configs: planners_of(args)
+            .iter()
+            .map(crate::results::config_record)
+            .collect(),
     }
 }
 

@@ -71,6 +71,9 @@ enum Command {
     Optimum(cmd::optimum::Cmd),
     /// Measure wall nanoseconds per unit of planner work (to calibrate the virtual clock).
     Calibrate(cmd::calibrate::Cmd),
+    /// The configuration reference: every value a `NAME@field=value` override sets, with its
+    /// unit, rule, the paper's and the tuned value (Markdown; docs/configuration.md).
+    Params(cmd::params::Cmd),
 }
 
 fn main() -> Result<()> {
@@ -90,5 +93,6 @@ fn main() -> Result<()> {
         Command::Growth(c) => cmd::growth::main(c),
         Command::Optimum(c) => cmd::optimum::main(c),
         Command::Calibrate(c) => cmd::calibrate::main(c),
+        Command::Params(c) => cmd::params::main(c),
     }
 }

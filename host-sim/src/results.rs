@@ -133,6 +133,20 @@ pub struct Settings {
     /// Fig. 7: radius of the disc dropped on goal 1's path (absent before issue 24: none).
     #[serde(default)]
     pub obstacle_m: Option<f32>,
+    /// Each planner's full configuration as the runs start from it (every value of the core's
+    /// parameter table, `host-sim params`), in the order of `planners`, before its lengths
+    /// are fitted to each map (absent before issue 43: not compared).
+    #[serde(default)]
+    pub configs: Vec<std::collections::BTreeMap<String, String>>,
+}
+
+/// A configuration as a results folder records it: every value of the parameter table, as
+/// text.
+pub fn config_record(cfg: &bi_am_rrt::Config) -> std::collections::BTreeMap<String, String> {
+    bi_am_rrt::config::PARAMS
+        .iter()
+        .map(|p| (p.name.to_string(), p.get(cfg).to_string()))
+        .collect()
 }
 
 impl Settings {
@@ -158,12 +172,17 @@ impl Settings {
         let a = serde_json::to_value(self).ok()?;
         let b = serde_json::to_value(other).ok()?;
         let (a, b) = (a.as_object()?, b.as_object()?);
-        a.iter().find(|(k, v)| b.get(*k) != Some(v)).map(|(k, v)| {
-            format!(
-                "{k}: {v} here, {} there",
-                b.get(k).cloned().unwrap_or_default()
-            )
-        })
+        // A folder made before the configurations were recorded has none to compare.
+        let unrecorded =
+            |k: &str| k == "configs" && (self.configs.is_empty() || other.configs.is_empty());
+        a.iter()
+            .find(|(k, v)| !unrecorded(k) && b.get(*k) != Some(v))
+            .map(|(k, v)| {
+                format!(
+                    "{k}: {v} here, {} there",
+                    b.get(k).cloned().unwrap_or_default()
+                )
+            })
     }
 }
 

@@ -265,6 +265,12 @@ fn seed_blocks_merge_into_one_matrix() {
         .unwrap()
         .settings;
     assert_eq!((s.seed, s.repeats), (3, 3));
+    // The folder records each planner's whole configuration, with the 5 ms t_exp applied.
+    assert_eq!(s.configs.len(), 2);
+    assert_eq!(s.configs[1]["bidirectional"], "true");
+    assert_eq!(s.configs[0]["bidirectional"], "false");
+    assert_eq!(s.configs[0]["t_exp"], "5");
+    assert_eq!(s.configs[0].len(), bi_am_rrt::config::PARAMS.len());
     // A gap (seeds 3 and 5) and an overlap (4-5 and 5) are refused.
     assert!(host_sim::results::merge(&[a, c.clone()], &dir.path().join("gap")).is_err());
     assert!(host_sim::results::merge(&[b, c], &dir.path().join("overlap")).is_err());
@@ -1117,6 +1123,48 @@ fn a_short_soak_changes_goals_and_stays_safe() {
     assert!(rows.iter().all(|r| r.nodes <= 2048 && r.optimal_m > 0.0));
     assert!(rows.iter().filter(|r| r.search_ms.is_some()).count() >= 3);
     assert!(dir.path().join("soak.csv").exists());
+}
+
+/// docs/configuration.md is the parameter table as `host-sim params` prints it (regenerate:
+/// `cargo run -p host-sim -- params > docs/configuration.md`).
+#[test]
+fn docs_configuration_is_the_parameter_table() {
+    let page = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/configuration.md");
+    let committed = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        committed == host_sim::planners::reference(),
+        "docs/configuration.md is stale: cargo run -p host-sim -- params > docs/configuration.md"
+    );
+}
+
+/// Every value of the parameter table is an override of the simulator's planner names, and a
+/// bad value or name is refused with the table's words.
+#[test]
+fn every_parameter_is_an_override() {
+    use bi_am_rrt::config::PARAMS;
+    let base = "Bi-AM-RRT*(D) tuned";
+    for p in &PARAMS {
+        let v = p.get(&bi_am_rrt::Config::paper()).to_string();
+        let spec = format!("{base}@{}={v}", p.name);
+        let got = host_sim::planners::parse_variants(&spec).unwrap();
+        assert_eq!(
+            p.get(&got[0].cfg),
+            p.get(&bi_am_rrt::Config::paper()),
+            "{spec}"
+        );
+    }
+    let err = host_sim::planners::parse_variants(&format!("{base}@e_max=-2")).unwrap_err();
+    assert!(
+        format!("{err:#}").contains("e_max must be finite and positive"),
+        "{err:#}"
+    );
+    let err = host_sim::planners::parse_variants(&format!("{base}@emax=2")).unwrap_err();
+    assert!(format!("{err:#}").contains("host-sim params"), "{err:#}");
+    // The tactics, one by one.
+    let got = host_sim::planners::parse_variants(&format!("{base}@connect=false")).unwrap();
+    let mut want = bi_am_rrt::Tactics::TUNED;
+    want.connect = false;
+    assert_eq!(got[0].cfg.tactics, want);
 }
 
 /// docs/results.md is what `report` makes of the data committed beside it (regenerate it with

@@ -7,7 +7,9 @@ use core::time::Duration;
 
 use crate::error::ConfigError;
 
+mod params;
 mod tactics;
+pub use params::{PAPER_VISITS, PARAMS, Param, SetError, Value, param, set};
 pub use tactics::Tactics;
 
 /// The base real-time planner.
@@ -569,52 +571,15 @@ impl Config {
             .find(|c| c.name() == name)
     }
 
-    /// Checks every field; the error names the first field out of range. A configuration that
-    /// passes gives a planner that grows: `t_exp` is not zero, `e_max` is finite and positive,
-    /// `sigma` finite and not negative, `n_max`, the sampling and steering counts and both
-    /// per-call caps at least 1, the three probabilities in `[0, 1]`, and the motion's
-    /// speeds, period and horizon finite and not negative.
+    /// Checks every value against its rule in the parameter table ([`PARAMS`], in its
+    /// order); the error names the first value out of range and its rule. A configuration
+    /// that passes gives a planner that grows: `t_exp` is not zero, `e_max` is finite and
+    /// positive, `sigma` finite and not negative, `n_max`, the sampling and steering counts and
+    /// both per-call caps at least 1, the four probabilities in `[0, 1]`, and the motion's
+    /// speeds, period and horizon, the body's radius and weight finite and not negative.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let unit = |p: f32| (0.0..=1.0).contains(&p);
-        let (s, b, m) = (&self.search, &self.budget, &self.motion);
-        let checks = [
-            (!b.t_exp.is_zero(), ConfigError::TExp),
-            (s.e_max.is_finite() && s.e_max > 0.0, ConfigError::EMax),
-            (self.memory.n_max >= 1, ConfigError::NMax),
-            (s.sigma.is_finite() && s.sigma >= 0.0, ConfigError::Sigma),
-            (
-                s.e_search.is_finite() && s.e_search >= 0.0,
-                ConfigError::ESearch,
-            ),
-            (
-                self.rewiring.root_step.is_finite() && self.rewiring.root_step >= 0.0,
-                ConfigError::RootStep,
-            ),
-            (s.steer_candidates >= 1, ConfigError::SteerCandidates),
-            (s.sample_attempts >= 1, ConfigError::SampleAttempts),
-            (b.max_expansions >= 1, ConfigError::MaxExpansions),
-            (b.max_work >= 1, ConfigError::MaxWork),
-            (unit(s.p_goal), ConfigError::PGoal),
-            (unit(s.p_uniform), ConfigError::PUniform),
-            (unit(s.p_beacon), ConfigError::PBeacon),
-            (unit(s.p_gap), ConfigError::PGap),
-            (
-                [m.agent_speed, m.period, m.horizon, m.obstacle_speed]
-                    .iter()
-                    .all(|v| v.is_finite() && *v >= 0.0),
-                ConfigError::Motion,
-            ),
-            (
-                self.robot_radius.is_finite() && self.robot_radius >= 0.0,
-                ConfigError::RobotRadius,
-            ),
-            (
-                self.clearance_weight.is_finite() && self.clearance_weight >= 0.0,
-                ConfigError::ClearanceWeight,
-            ),
-        ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some(&(_, e)) => Err(e),
+        match PARAMS.iter().find(|p| !p.keeps_rule(p.get(self))) {
+            Some(p) => Err(p.error()),
             None => Ok(()),
         }
     }

@@ -2,6 +2,9 @@
 
 use super::*;
 
+extern crate std;
+use std::string::ToString;
+
 #[test]
 fn table1_names() {
     let names: [&str; 20] = [
@@ -78,29 +81,185 @@ fn regression_silent_misconfiguration_is_refused() {
         assert_eq!(c.validate(), Ok(()));
     }
     let base = Config::bi_am_rrt(MetricKind::Diffusion);
-    type Case = (fn(&mut Config), ConfigError);
+    type Case = (fn(&mut Config), &'static str);
     let cases: [Case; 14] = [
-        (|c| c.search.e_max = f32::NAN, ConfigError::EMax),
-        (|c| c.search.e_max = -1.0, ConfigError::EMax),
-        (|c| c.search.e_max = f32::INFINITY, ConfigError::EMax),
-        (|c| c.search.sigma = f32::NAN, ConfigError::Sigma),
-        (|c| c.search.sigma = -3.0, ConfigError::Sigma),
-        (|c| c.budget.t_exp = Duration::ZERO, ConfigError::TExp),
-        (|c| c.search.p_goal = 1.5, ConfigError::PGoal),
-        (|c| c.search.p_beacon = f32::NAN, ConfigError::PBeacon),
-        (|c| c.search.p_gap = -0.1, ConfigError::PGap),
-        (|c| c.search.p_uniform = f32::NAN, ConfigError::PUniform),
-        (|c| c.memory.n_max = 0, ConfigError::NMax),
-        (
-            |c| c.search.sample_attempts = 0,
-            ConfigError::SampleAttempts,
-        ),
-        (|c| c.budget.max_expansions = 0, ConfigError::MaxExpansions),
-        (|c| c.budget.max_work = 0, ConfigError::MaxWork),
+        (|c| c.search.e_max = f32::NAN, "e_max"),
+        (|c| c.search.e_max = -1.0, "e_max"),
+        (|c| c.search.e_max = f32::INFINITY, "e_max"),
+        (|c| c.search.sigma = f32::NAN, "sigma"),
+        (|c| c.search.sigma = -3.0, "sigma"),
+        (|c| c.budget.t_exp = Duration::ZERO, "t_exp"),
+        (|c| c.search.p_goal = 1.5, "p_goal"),
+        (|c| c.search.p_beacon = f32::NAN, "p_beacon"),
+        (|c| c.search.p_gap = -0.1, "p_gap"),
+        (|c| c.search.p_uniform = f32::NAN, "p_uniform"),
+        (|c| c.memory.n_max = 0, "n_max"),
+        (|c| c.search.sample_attempts = 0, "sample_attempts"),
+        (|c| c.budget.max_expansions = 0, "max_expansions"),
+        (|c| c.budget.max_work = 0, "max_work"),
     ];
     for (set, want) in cases {
         let mut c = base;
         set(&mut c);
-        assert_eq!(c.validate(), Err(want));
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.param, want);
+        assert_eq!(e, param(want).unwrap().error());
     }
+}
+
+/// A configuration that differs from `Config::paper()` in every value, written as a struct
+/// literal: a field added to `Config` must be added here, and then the table must hold it for
+/// [`the_table_holds_every_value`] to pass.
+fn every_value_changed() -> Config {
+    Config {
+        base: Base::AmRrt,
+        metric: MetricKind::Diffusion,
+        bidirectional: false,
+        new_rewiring: false,
+        tactics: Tactics::TUNED,
+        search: Search {
+            e_max: 7.5,
+            e_search: 11.0,
+            sigma: 17.0,
+            steer_candidates: 9,
+            sample_attempts: 33,
+            p_goal: 0.25,
+            p_uniform: 0.125,
+            p_beacon: 0.375,
+            p_gap: 0.625,
+        },
+        rewiring: Rewiring {
+            t_root: Duration::from_micros(2500),
+            t_goal: Duration::from_nanos(1_000_001),
+            mode: RewireMode::PerExpansion { visits: 7 },
+            path_shortcuts: 3,
+            root_step: 2.25,
+        },
+        budget: Budget {
+            t_exp: Duration::from_millis(40),
+            max_expansions: 123,
+            max_work: 456_789,
+            clock_every: 64,
+            clock_every_max: 4096,
+        },
+        memory: Memory {
+            n_max: 11,
+            n_max_informed: 44,
+            recycle_cover: 5,
+        },
+        as_printed: AsPrinted::ALL,
+        motion: Motion {
+            agent_speed: 1.5,
+            period: 0.1,
+            horizon: 2.0,
+            obstacle_speed: 0.75,
+        },
+        robot_radius: 0.3,
+        clearance_weight: 1.25,
+    }
+}
+
+/// Every value of a configuration is in the parameter table: copying each value through its
+/// text onto the paper's configuration gives the other configuration exactly (durations to
+/// the nanosecond, reals bit for bit).
+#[test]
+fn the_table_holds_every_value() {
+    let target = every_value_changed();
+    let mut c = Config::paper();
+    for p in &PARAMS {
+        // `faithful` and `visits` share one field: the target is off the faithful mode.
+        if p.name != "faithful" {
+            assert_ne!(
+                p.get(&c),
+                p.get(&target),
+                "{}: pick a value that differs",
+                p.name
+            );
+        }
+        let text = p.get(&target).to_string();
+        p.set_text(&mut c, &text)
+            .unwrap_or_else(|e| panic!("{} = {text}: {e}", p.name));
+        assert_eq!(p.get(&c), p.get(&target), "{} = {text}", p.name);
+    }
+    assert_eq!(c, target);
+    // And the faithful mode, which `visits` ends.
+    set(&mut c, "faithful", "true").unwrap();
+    assert_eq!(c.rewiring.mode, RewireMode::Faithful);
+    assert_eq!(param("visits").unwrap().get(&c), Value::Count(0));
+    set(&mut c, "faithful", "false").unwrap();
+    assert_eq!(
+        c.rewiring.mode,
+        RewireMode::PerExpansion {
+            visits: PAPER_VISITS
+        }
+    );
+}
+
+#[test]
+fn the_table_names_each_value_once_and_every_switch() {
+    for (i, p) in PARAMS.iter().enumerate() {
+        assert!(
+            PARAMS.iter().skip(i + 1).all(|q| q.name != p.name),
+            "{} twice",
+            p.name
+        );
+        assert!(!p.doc.is_empty() && !p.doc.contains('\n'), "{}", p.name);
+        assert_eq!(param(p.name).map(|q| q.name), Some(p.name));
+    }
+    for name in Tactics::NAMES {
+        assert_eq!(param(name).unwrap().group, "tactics", "{name}");
+    }
+    let switches = PARAMS.iter().filter(|p| p.group == "as_printed").count();
+    assert_eq!(switches, AsPrinted::NAMES.len());
+}
+
+#[test]
+fn set_refuses_bad_text_and_leaves_the_configuration() {
+    let before = Config::paper();
+    let mut c = before;
+    let refused = [
+        (
+            "e_max",
+            "-1",
+            SetError::Rule(param("e_max").unwrap().error()),
+        ),
+        ("e_max", "five", SetError::Syntax),
+        (
+            "p_goal",
+            "1.5",
+            SetError::Rule(param("p_goal").unwrap().error()),
+        ),
+        ("n_max", "70000", SetError::TooLarge),
+        (
+            "n_max",
+            "0",
+            SetError::Rule(param("n_max").unwrap().error()),
+        ),
+        ("n_max", "-3", SetError::Syntax),
+        (
+            "t_exp",
+            "0",
+            SetError::Rule(param("t_exp").unwrap().error()),
+        ),
+        ("t_exp", "1.2345678", SetError::Syntax),
+        ("t_exp", ".5", SetError::Syntax),
+        ("t_exp", "5ms", SetError::Syntax),
+        ("connect", "yes", SetError::Syntax),
+        ("profile", "tuned", SetError::Unknown),
+    ];
+    for (name, text, want) in refused {
+        assert_eq!(set(&mut c, name, text), Err(want), "{name} = {text}");
+        assert_eq!(c, before, "{name} = {text}");
+    }
+    set(&mut c, "t_exp", " 2.5 ").unwrap();
+    assert_eq!(c.budget.t_exp, Duration::from_micros(2500));
+    assert_eq!(param("t_exp").unwrap().get(&c).to_string(), "2.5");
+    assert_eq!(
+        ConfigError {
+            param: "t_exp",
+            rule: crate::error::Rule::NonZero
+        }
+        .to_string(),
+        "t_exp must be longer than zero"
+    );
 }

@@ -5,7 +5,7 @@
 //! # One `plan` call
 //!
 //! The call's budget `t_exp` starts when it is made. First the root follows the agent (below),
-//! then, until `t_exp` has passed on the caller's clock (or `max_expansions_per_call` is
+//! then, until `t_exp` has passed on the caller's clock (or `max_expansions` is
 //! reached): expand the forward tree; then rewire it from the root for `t_root`; then, once the goal is
 //! in it, goal rewiring for `t_goal` (and the second kind for another `t_goal` with the new
 //! rewiring), then `path_shortcuts` shortcuts of the path (tuned) — RT-RRT* runs its random
@@ -371,7 +371,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         t_exp: core::time::Duration,
     ) -> Result<(), crate::error::ConfigError> {
         if t_exp.is_zero() {
-            return Err(crate::error::ConfigError::TExp);
+            return Err(crate::error::ConfigError {
+                param: "t_exp",
+                rule: crate::error::Rule::NonZero,
+            });
         }
         self.cfg.budget.t_exp = t_exp;
         Ok(())

@@ -12,6 +12,7 @@ pub mod growth;
 pub mod merge;
 pub mod moving;
 pub mod optimum;
+pub mod params;
 pub mod report;
 pub mod run;
 pub mod soak;
