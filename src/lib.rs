@@ -159,7 +159,7 @@ mod store;
 mod sweep;
 pub mod tree;
 
-pub use config::{AsPrinted, Base, Config, MetricKind, Motion, RewireMode, Tactics};
+pub use config::{AsPrinted, Base, Config, MetricKind, Motion, Named, RewireMode, Tactics};
 pub use geometry::Point;
 pub use map::{Circle, Map, Moving, OccupancyGrid};
 pub use metric::{DiffusionTable, Euclidean, Metric};

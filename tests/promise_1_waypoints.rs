@@ -11,7 +11,7 @@ use bi_am_rrt::builtin::{self};
 use bi_am_rrt::error::InputError;
 use bi_am_rrt::map::Circle;
 use bi_am_rrt::metric::DiffusionTable;
-use bi_am_rrt::{Config, Euclidean, MetricKind, Point, Status, Storage, Wait};
+use bi_am_rrt::{Config, Euclidean, MetricKind, Named, Point, Status, Storage, Wait};
 use common::checked::{clock, drive_checked, drive_with_drops, planner};
 use common::landmark_table;
 
@@ -24,14 +24,12 @@ fn regression_agent_sent_through_a_new_circle() {
     let mut totals = (0, 0, 0);
     for s in [&builtin::OPEN, &builtin::MAZE, &builtin::BUG_TRAP] {
         let table = landmark_table(&s.grid, 8);
-        for (name, cfg) in [
-            ("Bi-AM-RRT*(E)", Config::bi_am_rrt(MetricKind::Euclidean)),
-            ("Bi-AM-RRT*(D)", Config::bi_am_rrt(MetricKind::Diffusion)),
-            ("AM-RRT*(E)", Config::am_rrt(MetricKind::Euclidean)),
-        ] {
+        for name in ["Bi-AM-RRT*(E)", "Bi-AM-RRT*(D)", "AM-RRT*(E)"] {
+            let named = Named::from_name(name).unwrap();
+            let cfg = named.cfg;
             for seed in [1, 2] {
                 let mut storage = Box::new(Storage::<2048, 512>::new());
-                let t = if cfg.metric == MetricKind::Diffusion {
+                let t = if named.metric == MetricKind::Diffusion {
                     let m = DiffusionTable::new(&table).unwrap();
                     let mut p = planner(&mut storage, s, m, cfg, s.start, seed);
                     drive_with_drops(&mut p, s.goals[0])
@@ -62,7 +60,7 @@ fn regression_agent_sent_through_a_new_circle() {
 fn regression_agent_not_where_the_tree_thinks() {
     let s = &builtin::MAZE;
     let mut storage = Box::new(Storage::<2048, 512>::new());
-    let cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+    let cfg = Config::bi_am_rrt();
     let mut p = planner(&mut storage, s, Euclidean, cfg, s.start, 3);
     p.set_goal(s.goals[0]).unwrap();
     let clock = clock();
@@ -105,7 +103,7 @@ fn regression_agent_not_where_the_tree_thinks() {
 fn regression_no_why_when_waiting() {
     let s = &builtin::OPEN;
     let mut storage = Box::new(Storage::<2048, 512>::new());
-    let cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+    let cfg = Config::bi_am_rrt();
     let mut p = planner(&mut storage, s, Euclidean, cfg, s.start, 4);
     let clock = clock();
     assert_eq!(p.plan(&clock, s.start).unwrap().status, Status::NoGoal);

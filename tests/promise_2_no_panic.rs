@@ -10,7 +10,7 @@ use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::error::{InputError, SetupError};
 use bi_am_rrt::map::{Circle, OccupancyGrid};
 use bi_am_rrt::metric::DiffusionTable;
-use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Point, Status, Storage};
+use bi_am_rrt::{Config, Euclidean, Map, Planner, Point, Status, Storage};
 use common::checked::{K, Tally, clock, drive_checked, drive_with_drops, planner};
 use common::e2e::planner_on;
 use common::landmark_table;
@@ -25,7 +25,7 @@ fn regression_release_panic_on_an_accepted_huge_map() {
     for cell in [1.0e19f32, 1.0e30, 1.0e-30, 1.0e-3] {
         let grid = OccupancyGrid::new(&BITS, 2, 2, cell).unwrap();
         let mut storage = Box::new(Storage::<64, 8>::new());
-        let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+        let mut cfg = Config::bi_am_rrt();
         cfg.search.e_max = cell * 0.7;
         let start = Point::new(cell * 0.5, cell * 0.5);
         let goal = Point::new(cell * 1.5, cell * 1.5);
@@ -62,7 +62,7 @@ fn tiny_capacities_stay_valid() {
     fn run<const N: usize, const B: usize>(seed: u64, drops: bool) -> Tally {
         let s = &builtin::OPEN;
         let mut storage = Box::new(Storage::<N, B>::new());
-        let cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+        let cfg = Config::bi_am_rrt();
         let mut p = planner(&mut storage, s, Euclidean, cfg, s.start, seed);
         if drops {
             drive_with_drops(&mut p, s.goals[0])
@@ -149,7 +149,7 @@ fn regression_a_table_of_another_map_is_refused() {
         let mut storage: Box<Storage<64, 16>> = Box::default();
         let t = DiffusionTable::new(table_bytes).unwrap();
         let g = OccupancyGrid::new(grid_bits, n, n, 1.0).unwrap();
-        let cfg = Config::bi_am_rrt(MetricKind::Diffusion);
+        let cfg = Config::bi_am_rrt();
         Planner::<_, _, 64, 16, K>::new(
             &mut storage,
             Map::new(g),
@@ -184,7 +184,7 @@ fn regression_a_table_of_another_map_is_refused() {
 fn bad_input_is_an_error_not_a_panic() {
     let s = &builtin::OPEN;
     let mut storage = Box::new(Storage::<256, 64>::new());
-    let cfg = Config::am_rrt(MetricKind::Euclidean);
+    let cfg = Config::am_rrt();
     let rng = || XorShiftRng::seed_from_u64(1);
     let new = |st: &mut Storage<256, 64>, at: Point| {
         Planner::<_, _, 256, 64, K>::new(st, Map::new(s.grid), Euclidean, rng(), cfg, at).err()

@@ -20,8 +20,7 @@ use rand_xorshift::XorShiftRng;
 fn a_frozen_clock_still_returns() {
     let s = &builtin::MAZE;
     let mut storage = Box::new(Storage::<N, B>::new());
-    let mut cfg =
-        Config::bi_am_rrt(MetricKind::Euclidean).with_rewire_mode(bi_am_rrt::RewireMode::Faithful);
+    let mut cfg = Config::bi_am_rrt().with_rewire_mode(bi_am_rrt::RewireMode::Faithful);
     cfg.budget.max_expansions = 300;
     let mut p = planner_on(&mut storage, s, Euclidean, cfg, 9);
     p.set_goal(s.goals[0]).unwrap();
@@ -48,7 +47,7 @@ fn a_frozen_clock_still_returns() {
 fn regression_frozen_clock_call_is_bounded_by_work() {
     let s = &builtin::MAZE;
     let table = landmark_table(&s.grid, 8);
-    let base = Config::bi_am_rrt(MetricKind::Diffusion);
+    let base = Config::bi_am_rrt();
     for cfg in [
         base,
         base.with_rewire_mode(bi_am_rrt::RewireMode::Faithful),
@@ -66,7 +65,7 @@ fn regression_frozen_clock_call_is_bounded_by_work() {
             let pr = p.plan(&frozen, s.start).unwrap();
             eprintln!(
                 "{} {mode:?}, frozen: {} expansions, {} units",
-                cfg.name(),
+                cfg.name(MetricKind::Diffusion),
                 pr.expansions,
                 pr.work
             );
@@ -98,10 +97,7 @@ fn regression_work_that_cannot_stop_starts_only_if_it_ends_before_the_deadline()
         speed: 2.0,
         ..Protocol::default()
     };
-    for cfg in [
-        Config::bi_am_rrt(MetricKind::Diffusion).tuned(),
-        Config::bi_am_rrt(MetricKind::Diffusion),
-    ] {
+    for cfg in [Config::bi_am_rrt().tuned(), Config::bi_am_rrt()] {
         let mut storage = Box::new(Storage::<N, B>::new());
         let mut cfg = cfg.with_sigma(s.sigma);
         cfg.budget.t_exp = Duration::from_millis(150);
@@ -125,17 +121,21 @@ fn regression_work_that_cannot_stop_starts_only_if_it_ends_before_the_deadline()
                 calls += 1;
                 last = now;
             });
-            assert!(r.reached && r.collisions == 0, "{}: {r:?}", cfg.name());
+            assert!(
+                r.reached && r.collisions == 0,
+                "{}: {r:?}",
+                cfg.name(MetricKind::Diffusion)
+            );
         }
         assert!(
             nodes >= N / 2 && calls > 100,
             "{}: {calls} calls, {nodes} nodes",
-            cfg.name()
+            cfg.name(MetricKind::Diffusion)
         );
         assert!(
             worst <= 1_000_000,
             "{}: a call ended {} us after t_exp",
-            cfg.name(),
+            cfg.name(MetricKind::Diffusion),
             worst / 1_000
         );
     }

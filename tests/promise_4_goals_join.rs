@@ -152,11 +152,11 @@ fn regression_case_2_a_room_with_narrow_exits_does_not_starve_the_tree() {
     let mut failures = Vec::new();
     let mut starved = 0u32;
     for named in [
-        Config::bi_am_rrt(MetricKind::Euclidean),
-        Config::bi_am_rrt(MetricKind::Euclidean).tuned(),
-        Config::rt_rrt(MetricKind::Euclidean),
-        Config::rt_rrt(MetricKind::Euclidean).tuned(),
-        Config::am_rrt(MetricKind::Euclidean),
+        Config::bi_am_rrt(),
+        Config::bi_am_rrt().tuned(),
+        Config::rt_rrt(),
+        Config::rt_rrt().tuned(),
+        Config::am_rrt(),
     ] {
         for (lengths, cfg) in [("paper", named), ("map", named.for_grid(&grid))] {
             let mut cfg = cfg;
@@ -175,7 +175,7 @@ fn regression_case_2_a_room_with_narrow_exits_does_not_starve_the_tree() {
                 if joined.is_none() {
                     failures.push(format!(
                         "{} ({lengths} lengths) seed {seed}: {nodes} nodes",
-                        cfg.name()
+                        cfg.name(MetricKind::Euclidean)
                     ));
                 }
             }
@@ -201,9 +201,9 @@ fn regression_case_2_a_room_with_narrow_exits_does_not_starve_the_tree() {
 fn regression_case_3_a_full_arena_still_joins() {
     let s = &builtin::MAZE;
     for named in [
-        Config::rt_rrt(MetricKind::Euclidean),
-        Config::rt_rrt(MetricKind::Euclidean).tuned(),
-        Config::am_rrt(MetricKind::Euclidean).tuned(),
+        Config::rt_rrt(),
+        Config::rt_rrt().tuned(),
+        Config::am_rrt().tuned(),
     ] {
         let mut cfg = named.with_sigma(s.sigma);
         cfg.budget.t_exp = Duration::from_millis(2);
@@ -212,7 +212,7 @@ fn regression_case_3_a_full_arena_still_joins() {
     }
     let bits = rings_bits();
     let grid = OccupancyGrid::new(&bits, 120, 120, 1.0).unwrap();
-    let mut cfg = Config::am_rrt(MetricKind::Euclidean).tuned();
+    let mut cfg = Config::am_rrt().tuned();
     cfg.budget.t_exp = Duration::from_millis(20);
     let (start, goal) = (Point::new(60.0, 60.0), Point::new(5.0, 115.0));
     joins_held_and_following::<256, 256>(grid, cfg, start, goal, 2);
@@ -234,7 +234,7 @@ fn joins_held_and_following<const N: usize, const B: usize>(
             assert!(
                 joined.is_some(),
                 "{} seed {seed}, agent {agent:?}: {nodes} nodes",
-                cfg.name()
+                cfg.name(MetricKind::Euclidean)
             );
         }
     }
@@ -249,10 +249,7 @@ fn joins_held_and_following<const N: usize, const B: usize>(
 fn a_budget_shorter_than_a_rerooting_still_reaches_the_goal() {
     let s = &builtin::MAZE;
     let clock = FakeClock::nanos().with_work_cost(1_600).with_step(1);
-    for named in [
-        Config::bi_am_rrt(MetricKind::Euclidean),
-        Config::bi_am_rrt(MetricKind::Euclidean).tuned(),
-    ] {
+    for named in [Config::bi_am_rrt(), Config::bi_am_rrt().tuned()] {
         let mut cfg = named.with_sigma(s.sigma);
         cfg.budget.t_exp = Duration::from_millis(2);
         let mut storage = Box::new(Storage::<2048, 1024>::new());
@@ -281,7 +278,7 @@ fn a_budget_shorter_than_a_rerooting_still_reaches_the_goal() {
         assert!(
             reached.is_some(),
             "{}: the agent ended at {agent:?}, {} nodes",
-            cfg.name(),
+            planner.name(),
             planner.tree().len()
         );
     }
@@ -296,7 +293,7 @@ fn regression_reachable_goal_that_never_joins() {
     let clock = clock();
     for seed in 1..=3 {
         let mut storage = Box::new(Storage::<2048, 512>::new());
-        let cfg = Config::am_rrt(MetricKind::Euclidean);
+        let cfg = Config::am_rrt();
         let mut p = planner(&mut storage, s, Euclidean, cfg, s.start, seed);
         p.set_goal(s.goals[0]).unwrap();
         for _ in 0..20 {
@@ -313,7 +310,7 @@ fn regression_reachable_goal_that_never_joins() {
     let s = &builtin::OPEN;
     for seed in 1..=3 {
         let mut storage = Box::new(Storage::<2048, 512>::new());
-        let cfg = Config::rt_rrt(MetricKind::Euclidean);
+        let cfg = Config::rt_rrt();
         let mut p = planner(&mut storage, s, Euclidean, cfg, s.start, seed);
         // A dense neighbourhood around the root first.
         for _ in 0..30 {
@@ -335,7 +332,7 @@ fn regression_full_arena_keeps_a_reachable_goal_out() {
     let table = landmark_table(&s.grid, 8);
     for seed in [1, 2] {
         let mut storage = Box::new(Storage::<256, 64>::new());
-        let cfg = Config::bi_am_rrt(MetricKind::Diffusion);
+        let cfg = Config::bi_am_rrt();
         let metric = DiffusionTable::new(&table).unwrap();
         let mut p = planner(&mut storage, s, metric, cfg, s.start, seed);
         let mut was_full = false;
@@ -380,7 +377,7 @@ fn an_unreachable_goal_is_refused_or_never_found() {
     // A table knows the room is cut off.
     let table = landmark_table(&grid, 4);
     let mut storage = Box::new(Storage::<512, 64>::new());
-    let cfg = Config::bi_am_rrt(MetricKind::Diffusion);
+    let cfg = Config::bi_am_rrt();
     let mut p = Planner::<_, _, 512, 64, K>::new(
         &mut storage,
         Map::new(grid),
@@ -393,7 +390,7 @@ fn an_unreachable_goal_is_refused_or_never_found() {
     assert_eq!(p.set_goal(goal), Err(InputError::Unreachable));
     // The Euclidean metric cannot tell: the goal is accepted and simply never joins.
     let mut storage = Box::new(Storage::<512, 64>::new());
-    let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+    let mut cfg = Config::bi_am_rrt();
     cfg.budget.t_exp = Duration::from_millis(5);
     let mut p = Planner::<_, _, 512, 64, K>::new(
         &mut storage,

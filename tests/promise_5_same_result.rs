@@ -4,8 +4,8 @@
 
 mod common;
 
+use bi_am_rrt::Named;
 use bi_am_rrt::builtin::{self};
-use bi_am_rrt::{Config, MetricKind};
 use common::Protocol;
 use common::e2e::run;
 
@@ -17,8 +17,8 @@ fn same_seed_same_run() {
         ..Protocol::default()
     };
     for cfg in [
-        Config::bi_am_rrt(MetricKind::Diffusion),
-        Config::rt_rrt(MetricKind::Euclidean),
+        Named::from_name("Bi-AM-RRT*(D)").unwrap(),
+        Named::from_name("RT-RRT*").unwrap(),
     ] {
         let a = run(cfg, &builtin::MAZE, 3, proto);
         let b = run(cfg, &builtin::MAZE, 3, proto);

@@ -75,7 +75,7 @@ impl fmt::Display for Metres {
 pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
     let scenario = &builtin::OPEN;
     let map: Map<'static, 4> = Map::new(scenario.grid);
-    let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean);
+    let mut cfg = Config::bi_am_rrt();
     cfg.budget.t_exp = core::time::Duration::from_millis(5);
     let rng = XorShiftRng::seed_from_u64(1);
     let mut planner = Planner::new(storage, map, Euclidean, rng, cfg, scenario.start).ok()?;
@@ -91,7 +91,7 @@ pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
     )
     .ok()?;
     Some(Mission {
-        planner: cfg.name(),
+        planner: cfg.name(MetricKind::Euclidean),
         scenario: scenario.name,
         result,
         work: clock.work(),

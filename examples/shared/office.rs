@@ -218,7 +218,7 @@ pub fn exported_mission<C: Clock + ?Sized>(
     };
     // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
     // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
-    let base = Config::bi_am_rrt(MetricKind::Diffusion);
+    let base = Config::bi_am_rrt();
     let base = if option_env!("BIAMRRT_TUNED").is_some() {
         base.tuned()
     } else {
@@ -353,7 +353,7 @@ pub fn exported_mission<C: Clock + ?Sized>(
         hprintln!(
             "{} on {} (real clock, t_exp {} ms): {}/{} goals reached, path {} m, {} plan calls, \
              {} expansions ({}.{} per call), {} nodes at the end",
-            cfg.name(),
+            cfg.name(MetricKind::Diffusion),
             scenario::NAME,
             cfg.budget.t_exp.as_millis(),
             reached,
@@ -370,7 +370,7 @@ pub fn exported_mission<C: Clock + ?Sized>(
         hprintln!(
             "{} on {} (real clock, t_exp {} ms): reached {}, search {} ms, path {} m, \
              {} collisions, {} nodes at goal, {} nodes at the end, {} plan calls",
-            cfg.name(),
+            cfg.name(MetricKind::Diffusion),
             scenario::NAME,
             cfg.budget.t_exp.as_millis(),
             r.reached,

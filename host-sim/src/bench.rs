@@ -20,7 +20,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
-use bi_am_rrt::Config;
+use bi_am_rrt::Named;
 use serde::Serialize;
 
 use crate::clock::{CpuClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
@@ -196,7 +196,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         if args
             .variants
             .iter()
-            .any(|v| v.cfg.metric == bi_am_rrt::MetricKind::Diffusion)
+            .any(|v| v.named.metric == bi_am_rrt::MetricKind::Diffusion)
         {
             prep.diffusion()?;
         }
@@ -204,7 +204,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
             .variants
             .iter()
             .map(|v| v.config_for(&prep))
-            .collect::<Result<Vec<Config>>>()?;
+            .collect::<Result<Vec<Named>>>()?;
         for cfg in &fitted {
             let last = args.budgets.last().copied().unwrap_or(0.0);
             prep.warn_narrow_legs(*cfg, &|k| {
@@ -550,7 +550,7 @@ struct Run<'a> {
     clock: BenchClock,
     prep: &'a Prepared,
     /// The variant's configuration on this scenario ([`Variant::config_for`]).
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     start: bi_am_rrt::Point,
     goal: bi_am_rrt::Point,

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use anyhow::{Result, anyhow};
 use bi_am_rrt::clock::FakeClock;
-use bi_am_rrt::{Config, Planner, RewireMode, Storage};
+use bi_am_rrt::{Config, Named, Planner, RewireMode, Storage};
 use cpu_time::ThreadTime;
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -44,10 +44,11 @@ pub struct FrozenRow {
 }
 
 /// Frozen-clock calls for `base` on `prep` with 2,048 and 8,192 nodes, in both rewiring modes.
-pub fn frozen(prep: &Prepared, base: Config, calls: u32) -> Result<Vec<FrozenRow>> {
+pub fn frozen(prep: &Prepared, base: Named, calls: u32) -> Result<Vec<FrozenRow>> {
     let mut rows = Vec::new();
-    for mode in [base.rewiring.mode, RewireMode::Faithful] {
-        let cfg = prep.config(base).with_rewire_mode(mode);
+    for mode in [base.cfg.rewiring.mode, RewireMode::Faithful] {
+        let mut cfg = prep.fit(base);
+        cfg.cfg = cfg.cfg.with_rewire_mode(mode);
         rows.push(measure::<2048, 1024>(prep, cfg, calls)?);
         rows.push(measure::<8192, 2048>(prep, cfg, calls)?);
     }
@@ -56,11 +57,12 @@ pub fn frozen(prep: &Prepared, base: Config, calls: u32) -> Result<Vec<FrozenRow
 
 fn measure<const N: usize, const B: usize>(
     prep: &Prepared,
-    cfg: Config,
+    named: Named,
     calls: u32,
 ) -> Result<FrozenRow> {
+    let cfg = named.cfg;
     let mut storage: Box<Storage<N, B>> = Box::default();
-    let metric = prep.metric(cfg.metric)?;
+    let metric = prep.metric(named.metric)?;
     let sc = &prep.scenario;
     let mut p = Planner::<_, _, N, B, 8>::new(
         &mut storage,
@@ -89,7 +91,7 @@ fn measure<const N: usize, const B: usize>(
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     Ok(FrozenRow {
         map: sc.name.clone(),
-        planner: cfg.name().to_string(),
+        planner: named.name().to_string(),
         nodes: N,
         mode: match cfg.rewiring.mode {
             RewireMode::Faithful => "faithful".into(),
@@ -106,7 +108,7 @@ fn measure<const N: usize, const B: usize>(
 }
 
 /// `host-sim frozen`: [`frozen`] on each scenario, printed as CSV lines.
-pub fn print_frozen(scs: Vec<crate::maps::Scenario>, base: Config, calls: u32) -> Result<()> {
+pub fn print_frozen(scs: Vec<crate::maps::Scenario>, base: Named, calls: u32) -> Result<()> {
     println!(
         "map, planner, nodes, mode, calls, max units, median units, max CPU ms, median CPU ms, max expansions, cap"
     );

@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, anyhow, bail};
 use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::clock::Clock as _;
-use bi_am_rrt::{Config, RewireMode};
+use bi_am_rrt::{Named, RewireMode};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
@@ -48,7 +48,7 @@ pub struct ExperimentArgs {
     /// Scenarios to run.
     pub scenarios: Vec<Scenario>,
     /// Planner configurations (Table 1 names).
-    pub planners: Vec<Config>,
+    pub planners: Vec<Named>,
     /// Runs per planner and scenario.
     pub repeats: u32,
     /// Clock.
@@ -90,11 +90,12 @@ pub struct ExperimentArgs {
 }
 
 /// The planners as the runs use them (the switches applied).
-fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
+fn planners_of(args: &ExperimentArgs) -> Vec<Named> {
     args.planners
         .iter()
-        .map(|c| {
-            let mut c = *c;
+        .map(|n| {
+            let mut n = *n;
+            let c = &mut n.cfg;
             if args.faithful {
                 c.rewiring.mode = RewireMode::Faithful;
             }
@@ -104,9 +105,9 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Config> {
             c.as_printed = args.as_printed;
             c.as_printed.meet_all_pairs |= args.meet_all_pairs;
             if args.pace == crate::results::Pace::Paper {
-                paper_pace(&mut c);
+                paper_pace(c);
             }
-            c
+            n
         })
         .collect()
 }
@@ -136,13 +137,13 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
         ),
         configs: planners_of(args)
             .iter()
-            .map(crate::results::config_record)
+            .map(|n| crate::results::config_record(&n.cfg))
             .collect(),
     }
 }
 
 /// Runs one planner on one scenario with one seed and returns its rows.
-pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -> Result<Vec<Row>> {
+pub fn one_run(prep: &Prepared, cfg: Named, seed: u64, args: &ExperimentArgs) -> Result<Vec<Row>> {
     let wall = Instant::now();
     let goals: Vec<usize> = match args.goals {
         Goals::First => vec![0],
@@ -162,7 +163,8 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
             d.on_call(p, agent, leg_start, now_s);
         }
     };
-    let (runs, final_nodes) = with_planner(prep, prep.config(cfg), seed, |p| {
+    let fitted = prep.fit(cfg);
+    let (runs, final_nodes) = with_planner(prep, fitted, seed, |p| {
         let runs = match args.clock {
             ClockKind::Wall => {
                 let clock = WallClock::new();
@@ -177,7 +179,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
                 // At the paper's pace every call lasts its full t_exp, as in the paper's
                 // Python: the clock moves on to where the call's budget ends.
                 let paper = args.pace == crate::results::Pace::Paper;
-                let t_exp = clock.ticks(cfg.budget.t_exp);
+                let t_exp = clock.ticks(cfg.cfg.budget.t_exp);
                 let call_end = std::cell::Cell::new(clock.peek());
                 drive(p, prep, &clock, &goals, &protocol, |p, gi, a, _| {
                     if paper {
@@ -192,9 +194,9 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         Ok((runs, p.tree().len()))
     })?;
     let anytime = if args.anytime_ms > 0 {
-        let mut c = cfg;
-        c.budget.t_exp = Duration::from_millis(args.anytime_ms);
-        with_planner(prep, prep.config(c), seed, |p| {
+        let mut c = fitted;
+        c.cfg.budget.t_exp = Duration::from_millis(args.anytime_ms);
+        with_planner(prep, c, seed, |p| {
             p.set_goal(prep.scenario.goals[0])
                 .map_err(|e| anyhow!("{e}"))?;
             let progress = match args.clock {
@@ -207,7 +209,7 @@ pub fn one_run(prep: &Prepared, cfg: Config, seed: u64, args: &ExperimentArgs) -
         None
     };
     let run_wall_s = wall.elapsed().as_secs_f64();
-    let t_exp = cfg.budget.t_exp.as_secs_f64();
+    let t_exp = cfg.cfg.budget.t_exp.as_secs_f64();
     Ok(runs
         .iter()
         .map(|g| {
@@ -257,7 +259,7 @@ fn complete_runs(rows: &[Row], scenarios: &[Scenario], goals: Goals) -> BTreeSet
 /// Bakes what the planners need and times each map's processing.
 fn prepare(
     preps: &[Prepared],
-    planners: &[Config],
+    planners: &[Named],
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<MapTimes>> {
     let needs_d = planners
@@ -394,7 +396,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     // Legs through long narrow corridors, said before the runs (issue 42).
     for prep in &preps {
         for cfg in &planners {
-            prep.warn_narrow_legs(prep.config(*cfg), &|k| {
+            prep.warn_narrow_legs(prep.fit(*cfg), &|k| {
                 Some(format!(
                     "within the leg's {} calls",
                     prep.leg_calls(k, &Default::default())
@@ -424,7 +426,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
         crate::results::write_rows(out, &rows)?;
     }
     let wanted = manifest.runs();
-    let todo: Vec<(usize, Config, u64)> = wanted
+    let todo: Vec<(usize, Named, u64)> = wanted
         .iter()
         .filter(|k| !done.contains(k))
         .map(|k| {

@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::clock::Clock;
-use bi_am_rrt::{Config, RewireMode};
+use bi_am_rrt::{Named, RewireMode};
 use serde::Serialize;
 
 use crate::clock::{VIRTUAL_NS_PER_UNIT, WallClock};
@@ -24,7 +24,7 @@ pub fn calibrate(repeats: u32) -> Result<()> {
     let mut ratios = Vec::new();
     for prep in &preps {
         for name in ["Bi-AM-RRT*(D)", "AM-RRT*(E)", "RT-RRT*"] {
-            let cfg = Config::from_name(name).context("planner")?;
+            let cfg = Named::from_name(name).context("planner")?;
             for seed in 1..=repeats as u64 {
                 let clock = WallClock::new();
                 let t0 = clock.now();
@@ -33,7 +33,7 @@ pub fn calibrate(repeats: u32) -> Result<()> {
                     max_calls: 20,
                     ..Protocol::default()
                 };
-                with_planner(prep, prep.config(cfg), seed, |p| {
+                with_planner(prep, prep.fit(cfg), seed, |p| {
                     drive(p, prep, &clock, &[0], &protocol, |_, _, _, _| {}).map(|_| ())
                 })?;
                 let ns = (clock.now() - t0) as f64;
@@ -70,7 +70,7 @@ pub struct GrowthRow {
 /// (per-expansion visit budget, and the reference's full time budgets).
 pub fn growth(
     scenarios: &[Scenario],
-    planners: &[Config],
+    planners: &[Named],
     seconds: f64,
     call_ms: u64,
     seed: u64,
@@ -82,13 +82,13 @@ pub fn growth(
         let prep = Prepared::new(sc.clone());
         for base in planners {
             for (mode, rewire) in [
-                ("per-expansion", base.rewiring.mode),
+                ("per-expansion", base.cfg.rewiring.mode),
                 ("faithful", RewireMode::Faithful),
             ] {
                 let mut cfg = *base;
-                cfg.rewiring.mode = rewire;
-                cfg.budget.t_exp = Duration::from_millis(call_ms);
-                with_planner(&prep, prep.config(cfg), seed, |p| {
+                cfg.cfg.rewiring.mode = rewire;
+                cfg.cfg.budget.t_exp = Duration::from_millis(call_ms);
+                with_planner(&prep, prep.fit(cfg), seed, |p| {
                     p.set_goal(sc.goals[0])
                         .map_err(|e| anyhow::anyhow!("{e}"))?;
                     let clock = WallClock::new();

@@ -45,7 +45,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
 use bi_am_rrt::map::ObstacleId;
-use bi_am_rrt::{Circle, Config, Motion, Moving, Point, Status, Wait};
+use bi_am_rrt::{Circle, Motion, Moving, Named, Point, Status, Wait};
 use plotters::style::RGBColor;
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
@@ -323,10 +323,10 @@ pub struct MovingArgs {
 pub const ROUTE_CALLS: u32 = 400;
 
 /// The route: the planner's path to goal 1 after it has had time to settle (no walkers).
-fn route(prep: &Prepared, cfg: Config, calls: u32) -> Result<Vec<Point>> {
+fn route(prep: &Prepared, cfg: Named, calls: u32) -> Result<Vec<Point>> {
     let goal = *prep.scenario.goals.first().context("no goal")?;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
-    with_planner(prep, prep.config(cfg), 0, |p| {
+    with_planner(prep, prep.fit(cfg), 0, |p| {
         p.set_goal(goal).map_err(|e| anyhow!("{e}"))?;
         for _ in 0..calls {
             p.grow(&clock);
@@ -598,7 +598,7 @@ fn contact(a0: Point, a1: Point, o0: Point, o1: Point, r: f32) -> bool {
 #[allow(clippy::too_many_arguments)]
 fn one(
     prep: &Prepared,
-    base: Config,
+    base: Named,
     route: &[Point],
     kind: Kind,
     treatment: Treatment,
@@ -608,9 +608,9 @@ fn one(
 ) -> Result<MovingRow> {
     let goal = prep.scenario.goals[0];
     let optimum = prep.optima().first().copied().flatten().unwrap_or(f64::NAN);
-    let mut cfg = prep.config(base);
-    cfg.budget.t_exp = t_exp;
-    cfg.motion = if treatment == Treatment::Static {
+    let mut cfg = prep.fit(base);
+    cfg.cfg.budget.t_exp = t_exp;
+    cfg.cfg.motion = if treatment == Treatment::Static {
         Motion::NONE
     } else {
         MOTION
@@ -726,7 +726,7 @@ fn one(
 fn door_one(
     prep: &Prepared,
     closed: Option<&Prepared>,
-    base: Config,
+    base: Named,
     door: &Door,
     kind: Kind,
     treatment: Treatment,
@@ -734,9 +734,9 @@ fn door_one(
     t_exp: Duration,
     pictures: Option<(&Path, Option<u32>)>,
 ) -> Result<MovingRow> {
-    let mut cfg = prep.config(base);
-    cfg.budget.t_exp = t_exp;
-    cfg.motion = Motion::NONE;
+    let mut cfg = prep.fit(base);
+    cfg.cfg.budget.t_exp = t_exp;
+    cfg.cfg.motion = Motion::NONE;
     let shut = closed_grid(&prep.scenario.map, door);
     let optimum = match kind {
         Kind::ClosedDoor => closed.context("closed-door needs its map")?.optima()[0],
@@ -872,7 +872,7 @@ fn door_one(
 /// Runs `moving` on `prep` with the tuned planner.
 pub fn moving(prep: &Prepared, args: &MovingArgs) -> Result<Vec<MovingRow>> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}", args.out.display()))?;
-    let base = Config::default();
+    let base = Named::default();
     let route = route(prep, base, args.route_calls)?;
     let mut jobs = Vec::new();
     for &kind in &args.kinds {

@@ -3,25 +3,25 @@
 //! planner, its lengths fitted to the map, the overrides as written: [`Variant::config_for`]).
 
 use anyhow::{Context, Result, anyhow, bail};
-use bi_am_rrt::Config;
+use bi_am_rrt::{Config, Named};
 
 use crate::sim::Prepared;
 
 /// `all` or a comma-separated list of Table 1 names (any case, optionally ` tuned`).
-pub fn parse_planners(spec: &str) -> Result<Vec<Config>> {
+pub fn parse_planners(spec: &str) -> Result<Vec<Named>> {
     if spec.trim().eq_ignore_ascii_case("all") {
-        return Ok(Config::table1().to_vec());
+        return Ok(Named::table1().to_vec());
     }
     spec.split(',')
         .map(|name| {
             let name = name.trim();
             // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
-            let found = Config::table1()
+            let found = Named::table1()
                 .into_iter()
-                .chain(Config::table1().map(Config::tuned))
+                .chain(Named::table1().map(Named::tuned))
                 .find(|c| c.name().to_string().eq_ignore_ascii_case(name));
             found.with_context(|| {
-                let all: Vec<String> = Config::table1()
+                let all: Vec<String> = Named::table1()
                     .iter()
                     .map(|c| c.name().to_string())
                     .collect();
@@ -74,12 +74,12 @@ pub fn as_printed_names(p: bi_am_rrt::AsPrinted) -> Vec<String> {
 pub struct Variant {
     /// The name in the output.
     pub name: String,
-    /// The named configuration with the overrides applied as written (lengths not fitted to
-    /// any map): its name, metric and switches; a run's configuration is
+    /// The named planner with the overrides applied as written (lengths not fitted to any
+    /// map): its name, metric and switches; a run's configuration is
     /// [`Variant::config_for`].
-    pub cfg: Config,
-    /// The named configuration, before the overrides.
-    pub named: Config,
+    pub cfg: Named,
+    /// The named planner, before the overrides.
+    pub named: Named,
     /// The overrides (`field`, `value`), in the order written.
     pub overrides: Vec<(String, String)>,
 }
@@ -89,24 +89,24 @@ impl Variant {
     /// configuration, its lengths fitted to the map ([`Prepared::config`]: Table 2's with
     /// `paper_lengths`, and the scenario's `sigma`), then the overrides as written (a length
     /// set by hand is that many metres, whatever the named value).
-    pub fn config_for(&self, prep: &Prepared) -> Result<Config> {
-        let mut cfg = prep.config(self.named);
+    pub fn config_for(&self, prep: &Prepared) -> Result<Named> {
+        let mut cfg = prep.config(self.named.cfg);
         for (k, v) in &self.overrides {
             apply(&mut cfg, k, v)?;
         }
         cfg.validate()
             .map_err(|e| anyhow!("{} on {}: {e}", self.name, prep.scenario.name))?;
-        Ok(cfg)
+        Ok(Named {
+            metric: self.named.metric,
+            cfg,
+        })
     }
 }
 
 /// Comma-separated planner names: Table 1 names in any case, with or without the suffix
-/// `" tuned"`, each optionally followed by overrides `@field=value` (fields: `visits`,
-/// `faithful`, `e_max`, `e_search`, `sigma`, `steer_candidates`, `p_goal`, `p_uniform`,
-/// `p_beacon`, `p_gap`, `path_shortcuts`, `root_step`, `clock_every`, `clock_every_max`, `n_max`,
-/// `n_max_informed`, `recycle_cover`, `as_printed` (`all` or parts joined by `+`),
-/// `profile` (`paper` or `tuned`: the tuned profile's changes without its parameters, or the
-/// reverse)), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in one run.
+/// `" tuned"`, each optionally followed by overrides `@field=value` (any value of the
+/// parameter table, [`apply`]), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in one
+/// run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
     spec.split(',')
         .map(|item| {
@@ -122,10 +122,11 @@ pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
                 let (k, v) = o
                     .split_once('=')
                     .ok_or_else(|| anyhow!("override {o:?}: write field=value"))?;
-                apply(&mut cfg, k.trim(), v.trim()).with_context(|| format!("override {o:?}"))?;
+                apply(&mut cfg.cfg, k.trim(), v.trim())
+                    .with_context(|| format!("override {o:?}"))?;
                 overrides.push((k.trim().to_string(), v.trim().to_string()));
             }
-            cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
+            cfg.cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
             let label = item.trim().split_once('@').map(|x| x.1);
             Ok(Variant {
                 name: match label {

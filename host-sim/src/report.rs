@@ -18,7 +18,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use bi_am_rrt::Config;
 use plotters::prelude::*;
 
 use crate::chart::*;
@@ -29,7 +28,8 @@ use crate::stats::{Spread, mean};
 /// its original planner.
 fn scheme(name: &str) -> Option<(Scheme, String)> {
     let base = name.strip_suffix(" tuned").unwrap_or(name);
-    let c = Config::from_name(base)?;
+    let n = bi_am_rrt::Named::from_name(base)?;
+    let c = n.cfg;
     let s = match (c.bidirectional, c.new_rewiring) {
         (false, false) => Scheme::Original,
         (true, false) => Scheme::Bidirectional,
@@ -37,7 +37,7 @@ fn scheme(name: &str) -> Option<(Scheme, String)> {
         (true, true) => Scheme::Both,
     };
     let orig = c.with_bidirectional(false).with_new_rewiring(false);
-    let mut o = orig.name().to_string();
+    let mut o = orig.name(n.metric).to_string();
     if base.len() != name.len() {
         o.push_str(" tuned");
     }

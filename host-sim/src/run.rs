@@ -55,10 +55,10 @@ pub struct RunArgs {
 /// before the meet cleared it and the joining segment (the paper's Fig. 7b).
 fn join_scenes(
     prep: &Prepared,
-    mut cfg: bi_am_rrt::Config,
+    mut cfg: bi_am_rrt::Named,
     seed: u64,
 ) -> Result<(Option<Scene>, Option<Scene>)> {
-    cfg.budget.max_expansions = 1;
+    cfg.cfg.budget.max_expansions = 1;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
     with_planner(prep, cfg, seed, |p| {
         p.set_goal(prep.scenario.goals[0])
@@ -68,7 +68,7 @@ fn join_scenes(
             if p.grow(&clock).goal_in_tree {
                 let mut found = scene(p, &[prep.scenario.start], &prep.scenario, 0, String::new());
                 found.reverse = reverse;
-                let meet = p.stats().meet.filter(|_| cfg.bidirectional).map(|m| {
+                let meet = p.stats().meet.filter(|_| cfg.cfg.bidirectional).map(|m| {
                     let mut s = found.clone();
                     s.meet = Some(m);
                     s
@@ -160,7 +160,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let mut cfg = variant.config_for(&prep)?;
     if let Some(t) = args.t_exp {
         anyhow::ensure!(!t.is_zero(), "--t-exp-ms must be at least 1");
-        cfg.budget.t_exp = t;
+        cfg.cfg.budget.t_exp = t;
     }
     let paper = args.pace == crate::results::Pace::Paper;
     if paper {
@@ -168,7 +168,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             args.clock == ClockKind::Virtual,
             "--pace paper needs --clock virtual (every call lasts its full t_exp)"
         );
-        crate::sim::paper_pace(&mut cfg);
+        crate::sim::paper_pace(&mut cfg.cfg);
     }
     std::fs::create_dir_all(&args.out)?;
     let goals: Vec<usize> = if args.all_goals {
@@ -189,7 +189,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
     };
     let leg_starts = crate::optimum::leg_starts(&prep.scenario);
-    let t_exp_ticks = virtual_clock.ticks(cfg.budget.t_exp);
+    let t_exp_ticks = virtual_clock.ticks(cfg.cfg.budget.t_exp);
     let call_end = std::cell::Cell::new(0u64);
     let mut pictures: Vec<String> = Vec::new();
     let out = args.out.clone();
@@ -424,10 +424,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
             "that follow the map"
         },
         prep.scenario.length_scale(),
-        used.search.e_max,
-        used.search_step(),
-        used.rewiring.root_step,
-        used.search.sigma
+        used.cfg.search.e_max,
+        used.cfg.search_step(),
+        used.cfg.rewiring.root_step,
+        used.cfg.search.sigma
     );
     let legs = legs.into_inner();
     let raw = prep.scenario.map.grid();

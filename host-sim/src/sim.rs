@@ -12,7 +12,7 @@ use anyhow::{Result, anyhow};
 use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use bi_am_rrt::clock::Clock;
 use bi_am_rrt::metric::DiffusionTable;
-use bi_am_rrt::{Circle, Config, Map, MetricKind, Planner, Point, Storage};
+use bi_am_rrt::{Circle, Config, Map, MetricKind, Named, Planner, Point, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
@@ -150,8 +150,8 @@ impl Prepared {
     /// Prints [`narrow_warning`] to stderr for each of [`Prepared::narrow_legs`] with `cfg`'s
     /// lengths (the configuration a run gets here, fitted: [`Prepared::config`]); `budget(k)` says what the planner has for leg `k` (`None`:
     /// the leg is not run).
-    pub fn warn_narrow_legs(&self, cfg: Config, budget: &dyn Fn(usize) -> Option<String>) {
-        let e_max = cfg.search.e_max;
+    pub fn warn_narrow_legs(&self, cfg: Named, budget: &dyn Fn(usize) -> Option<String>) {
+        let e_max = cfg.cfg.search.e_max;
         let legs = self.narrow_legs(e_max);
         if legs.is_empty() {
             return;
@@ -232,6 +232,7 @@ impl Prepared {
                 self.graph(),
                 GEODESIC_CACHE_BYTES,
             )),
+            MetricKind::Other => anyhow::bail!("the simulator has no metric of kind (?)"),
         })
     }
 
@@ -251,6 +252,14 @@ impl Prepared {
         }
         c.with_sigma(self.scenario.sigma())
     }
+
+    /// [`Prepared::config`] of a named planner (its metric kept).
+    pub fn fit(&self, named: Named) -> Named {
+        Named {
+            cfg: self.config(named.cfg),
+            ..named
+        }
+    }
 }
 
 /// Builds a planner for `prep` and hands it to `f`. `cfg` is what the planner gets, as it is
@@ -259,7 +268,7 @@ impl Prepared {
 /// with overrides).
 pub fn with_planner<T>(
     prep: &Prepared,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
@@ -269,7 +278,7 @@ pub fn with_planner<T>(
 /// Builds a planner of `N` nodes per tree for `prep`, starting at `start`, and hands it to `f`.
 pub fn with_planner_at<const N: usize, T>(
     prep: &Prepared,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     start: bi_am_rrt::Point,
     f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
@@ -284,7 +293,7 @@ pub fn with_planner_at<const N: usize, T>(
 pub fn with_planner_in<const N: usize, T>(
     storage: &mut Storage<N, BUCKETS>,
     prep: &Prepared,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     start: bi_am_rrt::Point,
     f: impl FnOnce(&mut SizedPlanner<'_, '_, N>) -> Result<T>,
@@ -298,14 +307,14 @@ fn planner_on<'s, 'm, const N: usize>(
     storage: &'s mut Storage<N, BUCKETS>,
     prep: &'m Prepared,
     map: Map<'m, OBSTACLES>,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     start: bi_am_rrt::Point,
 ) -> Result<SizedPlanner<'s, 'm, N>> {
     prep.scenario.validate()?;
     let metric = prep.metric(cfg.metric)?;
     let rng = XorShiftRng::seed_from_u64(seed);
-    let mut cfg = cfg;
+    let mut cfg = cfg.cfg;
     cfg.robot_radius = prep.scenario.robot_radius;
     cfg.clearance_weight = prep.scenario.clearance_weight();
     Planner::new(storage, map, metric, rng, cfg, start)
@@ -316,7 +325,7 @@ fn planner_on<'s, 'm, const N: usize>(
 /// marks and clears with `set_cells` (issue 27's door).
 pub fn with_live_planner<T>(
     prep: &Prepared,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
@@ -605,7 +614,7 @@ pub const PAPER_VISITS: u16 = 8;
 #[allow(clippy::too_many_arguments)]
 pub fn row(
     prep: &Prepared,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     g: &crate::sim::GoalRun,
     clock: ClockKind,
@@ -632,7 +641,7 @@ pub fn row(
 pub fn row_with_optimum(
     prep: &Prepared,
     optimal: Option<f64>,
-    cfg: Config,
+    cfg: Named,
     seed: u64,
     g: &crate::sim::GoalRun,
     clock: ClockKind,

@@ -13,7 +13,7 @@ use anyhow::{Result, bail};
 use bi_am_rrt::clock::FakeClock;
 use bi_am_rrt::geometry::unit_f32;
 use bi_am_rrt::map::ObstacleId;
-use bi_am_rrt::{Circle, Config, Point};
+use bi_am_rrt::{Circle, Named, Point};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
@@ -29,7 +29,7 @@ pub struct StressArgs {
     /// Number of runs (spread over maps, planners and seeds).
     pub runs: u32,
     /// Planner names (Table 1).
-    pub planners: Vec<Config>,
+    pub planners: Vec<Named>,
     /// First seed.
     pub seed: u64,
     /// `t_exp` per call (virtual clock).
@@ -90,7 +90,7 @@ pub fn run(args: &StressArgs) -> Result<(StressSummary, Vec<StressRun>)> {
         bail!("stress needs at least one run and one planner");
     }
     let preps: Vec<Prepared> = builtin_scenarios().into_iter().map(Prepared::new).collect();
-    let cases: Vec<(usize, Config, u64)> = (0..args.runs as u64)
+    let cases: Vec<(usize, Named, u64)> = (0..args.runs as u64)
         .map(|i| {
             let map = i as usize % preps.len();
             let planner = args.planners[(i as usize / preps.len()) % args.planners.len()];
@@ -132,7 +132,7 @@ pub fn run(args: &StressArgs) -> Result<(StressSummary, Vec<StressRun>)> {
 }
 
 /// An empty row for a run (the failure reason, if any, given).
-fn row_for(prep: &Prepared, cfg: Config, seed: u64, reason: String) -> StressRun {
+fn row_for(prep: &Prepared, cfg: Named, seed: u64, reason: String) -> StressRun {
     StressRun {
         map: prep.scenario.name.clone(),
         planner: cfg.name().to_string(),
@@ -157,9 +157,9 @@ fn free_point(p: &crate::sim::SimPlanner<'_, '_>, rng: &mut XorShiftRng) -> Opti
     })
 }
 
-fn one(prep: &Prepared, base: Config, seed: u64, args: &StressArgs) -> Result<StressRun> {
-    let mut cfg = prep.config(base);
-    cfg.budget.t_exp = args.t_exp;
+fn one(prep: &Prepared, base: Named, seed: u64, args: &StressArgs) -> Result<StressRun> {
+    let mut cfg = prep.fit(base);
+    cfg.cfg.budget.t_exp = args.t_exp;
     let mut row = row_for(prep, base, seed, String::new());
     with_planner(prep, cfg, seed, |p| {
         let clock = FakeClock::nanos().with_work_cost(VIRTUAL_NS_PER_UNIT);

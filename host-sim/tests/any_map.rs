@@ -155,9 +155,9 @@ fn finer(s: &Scenario, k: u16) -> Scenario {
 /// the same) is not, nor is any leg of the reference, nav2 and benchmark maps of `../shared`.
 #[test]
 fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
-    let tuned = bi_am_rrt::Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
+    let tuned = bi_am_rrt::Named::default();
     let prep = host_sim::sim::Prepared::new(maze(64, 7));
-    let e_max = prep.config(tuned).search.e_max;
+    let e_max = prep.fit(tuned).cfg.search.e_max;
     let narrow = prep.narrow_legs(e_max);
     // Leg 2 (2 m between the goals) is too short to name.
     assert_eq!(narrow.iter().map(|n| n.0).collect::<Vec<_>>(), [0]);
@@ -192,7 +192,7 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
         ..wide
     };
     let prep = host_sim::sim::Prepared::new(wide);
-    let e_max = prep.config(tuned).search.e_max;
+    let e_max = prep.fit(tuned).cfg.search.e_max;
     assert!(
         e_max < 32.0,
         "corridors of 8 m stay wider than e_max / 4 ({e_max} m)"
@@ -201,7 +201,7 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
     // A 33 m maze of 1 m corridors drawn in 0.25 m cells: e_max (1.65 m, from the map's
     // size) / 4 is below the corridors' 4 cells.
     let prep = host_sim::sim::Prepared::new(finer(&maze(16, 3), 4));
-    let e_max = prep.config(tuned).search.e_max;
+    let e_max = prep.fit(tuned).cfg.search.e_max;
     assert!(prep.narrow_legs(e_max).is_empty(), "e_max {e_max}");
     // The maps of ../shared: none named.
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps");
@@ -217,7 +217,7 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
         }
         for s in host_sim::maps::load_scenarios(&path, None).unwrap() {
             let prep = host_sim::sim::Prepared::new(s);
-            let e_max = prep.config(tuned).search.e_max;
+            let e_max = prep.fit(tuned).cfg.search.e_max;
             let named = prep.narrow_legs(e_max);
             println!(
                 "{}: e_max {e_max} m, {} legs named",
@@ -392,13 +392,13 @@ fn classes() -> Vec<Scenario> {
 #[ignore = "long: seven generated maps, all legs (cargo test --release -- --ignored)"]
 fn every_class_of_map_reaches_its_goals_or_names_them_first() {
     use host_sim::sim::{Prepared, drive, with_planner};
-    let tuned = bi_am_rrt::Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
+    let tuned = bi_am_rrt::Named::default();
     let mut cfg = tuned;
-    cfg.budget.t_exp = std::time::Duration::from_millis(5);
+    cfg.cfg.budget.t_exp = std::time::Duration::from_millis(5);
     for s in classes() {
         let prep = Prepared::new(s).without_optimum();
         prep.diffusion().unwrap();
-        let e_max = prep.config(cfg).search.e_max;
+        let e_max = prep.fit(cfg).cfg.search.e_max;
         let named: Vec<usize> = prep.narrow_legs(e_max).iter().map(|n| n.0).collect();
         // Legs run in turn, each from the last one's goal: up to the first named one.
         let goals: Vec<usize> = (0..prep.scenario.goals.len())
@@ -407,7 +407,7 @@ fn every_class_of_map_reaches_its_goals_or_names_them_first() {
         println!("{}: legs named first: {named:?}", prep.scenario.name);
         let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
         let cpu = std::time::Instant::now();
-        let runs = with_planner(&prep, prep.config(cfg), 1, |p| {
+        let runs = with_planner(&prep, prep.fit(cfg), 1, |p| {
             drive(
                 p,
                 &prep,
@@ -465,10 +465,10 @@ fn regression_a_start_outside_the_largest_component_reaches_its_goal() {
         &[(16.5, 26.5)],
     );
     let prep = Prepared::new(s).without_optimum();
-    let mut cfg = bi_am_rrt::Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
-    cfg.budget.t_exp = std::time::Duration::from_millis(5);
+    let mut cfg = bi_am_rrt::Named::default();
+    cfg.cfg.budget.t_exp = std::time::Duration::from_millis(5);
     let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
-    let runs = with_planner(&prep, prep.config(cfg), 1, |p| {
+    let runs = with_planner(&prep, prep.fit(cfg), 1, |p| {
         drive(
             p,
             &prep,

@@ -194,7 +194,7 @@ fn regression_maze512_no_collisions() {
     let prep = host_sim::sim::Prepared::new(sc);
     prep.diffusion().unwrap();
     let mut cfg = host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap()[0].cfg;
-    cfg.budget.t_exp = std::time::Duration::from_millis(5);
+    cfg.cfg.budget.t_exp = std::time::Duration::from_millis(5);
     let goals: Vec<usize> = (0..prep.scenario.goals.len()).collect();
     let seeds: u64 = std::env::var("MAZE512_SEEDS")
         .ok()
@@ -204,7 +204,7 @@ fn regression_maze512_no_collisions() {
         .into_par_iter()
         .flat_map_iter(|seed| {
             let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
-            let runs = host_sim::sim::with_planner(&prep, prep.config(cfg), seed, |p| {
+            let runs = host_sim::sim::with_planner(&prep, prep.fit(cfg), seed, |p| {
                 host_sim::sim::drive(
                     p,
                     &prep,

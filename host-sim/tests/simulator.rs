@@ -552,8 +552,8 @@ fn stress_runs_are_safe() {
     let (sum, rows) = host_sim::stress::run(&host_sim::stress::StressArgs {
         runs: 6,
         planners: vec![
-            bi_am_rrt::Config::bi_am_rrt(bi_am_rrt::MetricKind::Euclidean),
-            bi_am_rrt::Config::rt_rrt(bi_am_rrt::MetricKind::Euclidean),
+            bi_am_rrt::Named::from_name("Bi-AM-RRT*(E)").unwrap(),
+            bi_am_rrt::Named::from_name("RT-RRT*").unwrap(),
         ],
         seed: 11,
         t_exp: std::time::Duration::from_millis(3),
@@ -839,7 +839,7 @@ fn bench_measures_every_leg_variant_and_seed() {
     let variants =
         host_sim::planners::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8").unwrap();
     assert_eq!(variants[1].name, "Bi-AM-RRT*(E) tuned@e_search=8");
-    assert_eq!(variants[1].cfg.search.e_search, 8.0);
+    assert_eq!(variants[1].cfg.cfg.search.e_search, 8.0);
     let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
@@ -1148,7 +1148,7 @@ fn every_parameter_is_an_override() {
         let spec = format!("{base}@{}={v}", p.name);
         let got = host_sim::planners::parse_variants(&spec).unwrap();
         assert_eq!(
-            p.get(&got[0].cfg),
+            p.get(&got[0].cfg.cfg),
             p.get(&bi_am_rrt::Config::paper()),
             "{spec}"
         );
@@ -1164,7 +1164,7 @@ fn every_parameter_is_an_override() {
     let got = host_sim::planners::parse_variants(&format!("{base}@connect=false")).unwrap();
     let mut want = bi_am_rrt::Tactics::TUNED;
     want.connect = false;
-    assert_eq!(got[0].cfg.tactics, want);
+    assert_eq!(got[0].cfg.cfg.tactics, want);
 }
 
 /// docs/results.md is what `report` makes of the data committed beside it (regenerate it with
@@ -1358,9 +1358,9 @@ fn a_map_baked_on_its_pieces_agrees_with_the_cell_bake() {
 /// (`@e_max=...`) as written.
 #[test]
 fn run_lengths_follow_the_map() {
-    use bi_am_rrt::{Config, MetricKind};
+    use bi_am_rrt::Config;
     use host_sim::sim::Prepared;
-    let paper = Config::bi_am_rrt(MetricKind::Diffusion);
+    let paper = Config::bi_am_rrt();
     for tuned in [false, true] {
         let named = if tuned { paper.tuned() } else { paper };
         // office_200: 200 m at 1 m cells.
@@ -1389,7 +1389,7 @@ fn run_lengths_follow_the_map() {
             "Bi-AM-RRT*(D)"
         };
         let hand = host_sim::planners::parse_variants(&format!("{spec}@e_max=8")).unwrap();
-        let c = hand[0].config_for(&maze).unwrap();
+        let c = hand[0].config_for(&maze).unwrap().cfg;
         assert_eq!(c.search.e_max, 8.0, "a length set by hand");
         sc.paper_lengths = true;
         let maze = Prepared::new(sc);
@@ -1421,14 +1421,14 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
     let named = host_sim::planners::parse_variants(spec).unwrap()[0].clone();
     // Fitted to the 40 m map (scale 0.4): e_max 5 m -> 2 m, kept at 4 cells (4 m); sigma 12 m.
     let fitted = Prepared::new(load());
-    let c = named.config_for(&fitted).unwrap();
+    let c = named.config_for(&fitted).unwrap().cfg;
     assert_eq!(c.search.e_max, 4.0);
     assert!((c.search.sigma - 12.0).abs() < 1e-4, "{}", c.search.sigma);
     // The paper's lengths: Table 2's e_max and sigma, both.
     let mut sc = load();
     sc.paper_lengths = true;
     let paper = Prepared::new(sc);
-    let c = named.config_for(&paper).unwrap();
+    let c = named.config_for(&paper).unwrap().cfg;
     assert_eq!(c.search.e_max, 5.0);
     assert_eq!(
         c.search.sigma, 30.0,
@@ -1437,7 +1437,7 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
     // Overrides as written, whatever the named value.
     let hand =
         host_sim::planners::parse_variants("Bi-AM-RRT*(D)@e_max=5@sigma=7").unwrap()[0].clone();
-    let c = hand.config_for(&fitted).unwrap();
+    let c = hand.config_for(&fitted).unwrap().cfg;
     assert_eq!(c.search.e_max, 5.0, "@e_max=5 is 5 m, not the fitted 4 m");
     assert_eq!(c.search.sigma, 7.0, "@sigma=7 is kept");
 }

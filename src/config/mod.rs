@@ -1,14 +1,16 @@
-//! Planner configuration: the base algorithm, the assisting metric, the two switches of the
-//! paper (bidirectional search, new rewiring) and the parameters of its Table 2. The 20
-//! planners of the paper's Table 1 are named configurations of the one planner.
+//! Planner configuration: the base algorithm, the two switches of the paper (bidirectional
+//! search, new rewiring), the parameters of its Table 2 and the tuned planner's tactics. The
+//! 20 planners of the paper's Table 1 are configurations of the one planner, each with the
+//! kind of metric it runs with (`names.rs`); every value is in one table (`params.rs`).
 
-use core::fmt;
 use core::time::Duration;
 
 use crate::error::ConfigError;
 
+mod names;
 mod params;
 mod tactics;
+pub use names::{Named, PlannerName};
 pub use params::{PAPER_VISITS, PARAMS, Param, SetError, Value, param, set};
 pub use tactics::Tactics;
 
@@ -33,8 +35,8 @@ pub enum Base {
     AmRrt,
 }
 
-/// Which assisting metric a configuration is meant for (for its name; the metric itself is
-/// the value passed to the planner).
+/// Which assisting metric a planner runs with, for its name: a metric names its kind
+/// ([`crate::Metric::kind`]), so a configuration does not hold one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum MetricKind {
@@ -44,6 +46,8 @@ pub enum MetricKind {
     Diffusion,
     /// `d_G`, written (G).
     Geodesic,
+    /// A metric of the caller's own, written (?).
+    Other,
 }
 
 impl MetricKind {
@@ -53,6 +57,7 @@ impl MetricKind {
             Self::Euclidean => 'E',
             Self::Diffusion => 'D',
             Self::Geodesic => 'G',
+            Self::Other => '?',
         }
     }
 }
@@ -295,17 +300,15 @@ impl Motion {
 }
 
 /// Everything that configures a planner, on one screen: which planner (Table 1's two
-/// switches on a base and a metric, and the tactics), then four groups of parameters.
-/// [`Config::default`] is the tuned Bi-AM-RRT*(D); [`Config::paper`] the paper's, and
-/// [`Config::table1`] all 20 of the paper's planners. Fit the lengths to a map with
-/// [`Config::for_grid`].
+/// switches on a base, and the tactics), then the groups of parameters; the metric is the
+/// value passed to [`crate::Planner::new`]. [`Config::default`] is the tuned Bi-AM-RRT*(D);
+/// [`Config::paper`] the paper's, and [`Named::table1`] all 20 of the paper's planners (each
+/// a configuration and a kind of metric). Fit the lengths to a map with [`Config::for_grid`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
     /// Base algorithm.
     pub base: Base,
-    /// Assisting metric the configuration is named for.
-    pub metric: MetricKind,
     /// Grow a reverse tree from the goal until the trees meet (suffix `-1`, prefix `Bi-`).
     pub bidirectional: bool,
     /// The paper's new rewiring (Algorithms 4 and 6; suffix `-2`, prefix `Bi-`). On RT-RRT*
@@ -343,20 +346,19 @@ impl Default for Config {
     /// The tuned Bi-AM-RRT*(D): what a user gets without choosing (fit it to the map with
     /// [`Config::for_grid`]).
     fn default() -> Self {
-        Self::bi_am_rrt(MetricKind::Diffusion).tuned()
+        Self::bi_am_rrt().tuned()
     }
 }
 
 impl Config {
     /// The base planner with Table 2's parameters, unidirectional, original rewiring.
-    pub const fn new(base: Base, metric: MetricKind) -> Self {
+    pub const fn new(base: Base) -> Self {
         let (t_root, t_goal, n_max) = match base {
             Base::RtRrt => (3, 3, 12),
             Base::AmRrt => (2, 4, 20),
         };
         Self {
             base,
-            metric,
             bidirectional: false,
             new_rewiring: false,
             tactics: Tactics::NONE,
@@ -400,7 +402,7 @@ impl Config {
     /// The paper's proposal, Bi-AM-RRT*(D) with Table 2's parameters (labelled as the
     /// paper's: no [`Tactics`]).
     pub const fn paper() -> Self {
-        Self::bi_am_rrt(MetricKind::Diffusion)
+        Self::bi_am_rrt()
     }
 
     /// The tuned version of a configuration: the same planner (base, metric, Table 1's
@@ -476,26 +478,26 @@ impl Config {
         self.for_map(grid.width_m(), grid.height_m(), grid.cell_size())
     }
 
-    /// RT-RRT* (metric `Euclidean`) or RT-RRT*(D) (`Diffusion`).
-    pub const fn rt_rrt(metric: MetricKind) -> Self {
-        Self::new(Base::RtRrt, metric)
+    /// RT-RRT* (with the Euclidean metric) or RT-RRT*(D) (with a diffusion table).
+    pub const fn rt_rrt() -> Self {
+        Self::new(Base::RtRrt)
     }
 
-    /// AM-RRT*(E/D/G).
-    pub const fn am_rrt(metric: MetricKind) -> Self {
-        Self::new(Base::AmRrt, metric)
+    /// AM-RRT*(E/D/G), with the metric passed to the planner.
+    pub const fn am_rrt() -> Self {
+        Self::new(Base::AmRrt)
     }
 
     /// Bi-RT-RRT* / Bi-RT-RRT*(D): both switches on.
-    pub const fn bi_rt_rrt(metric: MetricKind) -> Self {
-        Self::rt_rrt(metric)
+    pub const fn bi_rt_rrt() -> Self {
+        Self::rt_rrt()
             .with_bidirectional(true)
             .with_new_rewiring(true)
     }
 
     /// Bi-AM-RRT*(E/D/G): both switches on (the paper's proposal).
-    pub const fn bi_am_rrt(metric: MetricKind) -> Self {
-        Self::am_rrt(metric)
+    pub const fn bi_am_rrt() -> Self {
+        Self::am_rrt()
             .with_bidirectional(true)
             .with_new_rewiring(true)
     }
@@ -534,43 +536,6 @@ impl Config {
         self
     }
 
-    /// The 20 planners of the paper's Table 1, row by row: original, bidirectional only (`-1`),
-    /// new rewiring only (`-2`), both (`Bi-`); in each row RT-RRT*, RT-RRT*(D), AM-RRT*(E),
-    /// AM-RRT*(D), AM-RRT*(G).
-    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)] // 4 x 5 fixed loops
-    pub const fn table1() -> [Config; 20] {
-        let bases = [
-            Self::rt_rrt(MetricKind::Euclidean),
-            Self::rt_rrt(MetricKind::Diffusion),
-            Self::am_rrt(MetricKind::Euclidean),
-            Self::am_rrt(MetricKind::Diffusion),
-            Self::am_rrt(MetricKind::Geodesic),
-        ];
-        let mut out = [bases[0]; 20];
-        let mut row = 0;
-        while row < 4 {
-            let mut col = 0;
-            while col < 5 {
-                out[row * 5 + col] = bases[col]
-                    .with_bidirectional(row == 1 || row == 3)
-                    .with_new_rewiring(row == 2 || row == 3);
-                col += 1;
-            }
-            row += 1;
-        }
-        out
-    }
-
-    /// The configuration with this Table 1 name (e.g. `"Bi-AM-RRT*(D)"`, `"RT-RRT*-2"`), or
-    /// its tuned version with the suffix `" tuned"` (`"Bi-AM-RRT*(D) tuned"`).
-    pub fn from_name(name: &str) -> Option<Self> {
-        let tuned = Self::table1().map(Self::tuned);
-        Self::table1()
-            .into_iter()
-            .chain(tuned)
-            .find(|c| c.name() == name)
-    }
-
     /// Checks every value against its rule in the parameter table ([`PARAMS`], in its
     /// order); the error names the first value out of range and its rule. A configuration
     /// that passes gives a planner that grows: `t_exp` is not zero, `e_max` is finite and
@@ -584,9 +549,10 @@ impl Config {
         }
     }
 
-    /// The paper's name of this configuration (a `Display` value).
-    pub const fn name(&self) -> PlannerName {
-        PlannerName(*self)
+    /// The paper's name of this configuration run with a metric of kind `metric` (a
+    /// `Display` value; [`crate::Planner::name`] gives the name with the planner's metric).
+    pub const fn name(&self, metric: MetricKind) -> PlannerName {
+        PlannerName(Named { metric, cfg: *self })
     }
 }
 
@@ -612,62 +578,6 @@ pub fn length_scale(extent_m: f32) -> f32 {
         extent_m / hi
     } else {
         1.0
-    }
-}
-
-/// The paper's Table 1 name of a configuration, e.g. `Bi-AM-RRT*(D)`, `RT-RRT*(D)-1`.
-#[derive(Clone, Copy, Debug)]
-pub struct PlannerName(Config);
-
-impl fmt::Display for PlannerName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let c = &self.0;
-        let both = c.bidirectional && c.new_rewiring;
-        if both {
-            f.write_str("Bi-")?;
-        }
-        match (c.base, c.metric) {
-            (Base::RtRrt, MetricKind::Euclidean) => f.write_str("RT-RRT*")?,
-            (Base::RtRrt, m) => write!(f, "RT-RRT*({})", m.letter())?,
-            (Base::AmRrt, m) => write!(f, "AM-RRT*({})", m.letter())?,
-        }
-        if !both && c.bidirectional {
-            f.write_str("-1")?;
-        }
-        if !both && c.new_rewiring {
-            f.write_str("-2")?;
-        }
-        if c.tactics == Tactics::TUNED {
-            f.write_str(" tuned")?;
-        } else if c.tactics != Tactics::NONE {
-            // Some tactics: named one by one, so the name says what runs.
-            for (name, on) in Tactics::NAMES.iter().zip(c.tactics.as_array()) {
-                if on {
-                    write!(f, " +{name}")?;
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-impl PartialEq<&str> for PlannerName {
-    fn eq(&self, other: &&str) -> bool {
-        // Compare without allocating: write into a comparer.
-        struct Cmp<'a>(&'a str, bool);
-        impl fmt::Write for Cmp<'_> {
-            fn write_str(&mut self, s: &str) -> fmt::Result {
-                if self.1 && self.0.starts_with(s) {
-                    self.0 = &self.0[s.len()..];
-                } else {
-                    self.1 = false;
-                }
-                Ok(())
-            }
-        }
-        let mut c = Cmp(other, true);
-        let _ = fmt::write(&mut c, format_args!("{self}"));
-        c.1 && c.0.is_empty()
     }
 }
 

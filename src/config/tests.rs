@@ -29,31 +29,40 @@ fn table1_names() {
         "Bi-AM-RRT*(D)",
         "Bi-AM-RRT*(G)",
     ];
-    for (c, n) in Config::table1().iter().zip(names) {
+    for (c, n) in Named::table1().iter().zip(names) {
         assert!(c.name() == n, "{n}");
-        assert_eq!(Config::from_name(n), Some(*c));
+        assert_eq!(Named::from_name(n), Some(*c));
     }
     assert_eq!(
-        Config::from_name("Bi-AM-RRT*(D)"),
-        Some(Config::bi_am_rrt(MetricKind::Diffusion))
+        Named::from_name("Bi-AM-RRT*(D)"),
+        Some(Named {
+            metric: MetricKind::Diffusion,
+            cfg: Config::paper()
+        })
     );
-    assert!(Config::from_name("Bi-AM-RRT*").is_none());
-    let tuned = Config::from_name("Bi-AM-RRT*(D) tuned").unwrap();
-    assert_eq!(tuned, Config::bi_am_rrt(MetricKind::Diffusion).tuned());
-    assert_eq!(tuned.tactics, Tactics::TUNED);
-    assert_eq!(tuned.validate(), Ok(()));
-    assert!(Config::from_name("AM-RRT*(D)-12").is_none());
+    assert!(Named::from_name("Bi-AM-RRT*").is_none());
+    let tuned = Named::from_name("Bi-AM-RRT*(D) tuned").unwrap();
+    assert_eq!(tuned.cfg, Config::default());
+    assert_eq!(tuned.cfg.tactics, Tactics::TUNED);
+    assert_eq!(tuned.cfg.validate(), Ok(()));
+    assert!(Named::from_name("AM-RRT*(D)-12").is_none());
+    // Some tactics: named one by one; a metric of the caller's own: (?).
+    let mut some = Config::paper();
+    some.tactics.connect = true;
+    some.tactics.corner_cuts = true;
+    assert!(some.name(MetricKind::Other) == "Bi-AM-RRT*(?) +connect +corner_cuts");
 }
 
 #[test]
 fn lengths_follow_the_map_and_keep_table_2_on_the_papers() {
-    for c in Config::table1()
+    for n in Named::table1()
         .into_iter()
-        .chain(Config::table1().map(Config::tuned))
+        .chain(Named::table1().map(Named::tuned))
     {
+        let c = n.cfg;
         // The paper's maps: 100 m and 200 m at 1 m cells, bit for bit.
         for side in [100.0, 150.0, 200.0] {
-            assert_eq!(c.for_map(side, side, 1.0), c, "{}", c.name());
+            assert_eq!(c.for_map(side, side, 1.0), c, "{}", n.name());
         }
         // A 20 m map at 0.05 m: a fifth of every length.
         let f = c.for_map(20.0, 15.0, 0.05);
@@ -77,10 +86,10 @@ fn lengths_follow_the_map_and_keep_table_2_on_the_papers() {
 /// accepted and gave a planner that silently never grew.
 #[test]
 fn regression_silent_misconfiguration_is_refused() {
-    for c in Config::table1() {
-        assert_eq!(c.validate(), Ok(()));
+    for n in Named::table1() {
+        assert_eq!(n.cfg.validate(), Ok(()));
     }
-    let base = Config::bi_am_rrt(MetricKind::Diffusion);
+    let base = Config::bi_am_rrt();
     type Case = (fn(&mut Config), &'static str);
     let cases: [Case; 14] = [
         (|c| c.search.e_max = f32::NAN, "e_max"),
@@ -113,7 +122,6 @@ fn regression_silent_misconfiguration_is_refused() {
 fn every_value_changed() -> Config {
     Config {
         base: Base::AmRrt,
-        metric: MetricKind::Diffusion,
         bidirectional: false,
         new_rewiring: false,
         tactics: Tactics::TUNED,

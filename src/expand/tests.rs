@@ -43,7 +43,7 @@ fn steering_picks_the_free_candidate_nearest_by_the_metric() {
     let clock = FakeClock::new(1);
     let meter = Meter::new(&clock);
     for candidates in [1u16, 7, 24, 32, 33, 70] {
-        let mut cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
+        let mut cfg = Config::bi_am_rrt();
         cfg.search.steer_candidates = candidates;
         let env = Env {
             map: &map,
@@ -98,7 +98,7 @@ fn nearest_step_tests_only_the_step() {
     assert!(Manhattan.distance(b, x) < Manhattan.distance(a, x));
     let clock = FakeClock::new(1);
     let meter = Meter::new(&clock);
-    let cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
+    let cfg = Config::bi_am_rrt();
     let env = Env {
         map: &map,
         metric: &Manhattan,
@@ -152,7 +152,7 @@ fn beacon_samples_fall_near_the_path() {
     };
     let clock = FakeClock::new(1);
     let meter = Meter::new(&clock);
-    let paper = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+    let paper = Config::bi_am_rrt();
     let mut cfg = paper;
     cfg.search.p_beacon = 1.0;
     let env_paper = Env {
@@ -210,7 +210,7 @@ fn regression_parent_choice_stops_at_the_call_deadline() {
         .unwrap();
     near.push(last).unwrap();
     let x = Point::new(12.5, 19.5);
-    let cfg = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+    let cfg = Config::bi_am_rrt();
     let clock = FakeClock::new(1_000_000_000);
     for (call, parent) in [
         (Deadline::NEVER, Some(last)),
@@ -254,7 +254,7 @@ fn regression_metric_nearest_scan_stops_at_the_deadline() {
         let p = Point::new(0.5 + (i % 9) as f32, 0.5 + (i / 9) as f32 * 0.03);
         store.insert(p, root, false).unwrap();
     }
-    let cfg = Config::bi_am_rrt(crate::MetricKind::Diffusion);
+    let cfg = Config::bi_am_rrt();
     let clock = FakeClock::new(1_000_000_000);
     let meter = Meter::new(&clock);
     let q = Point::new(15.5, 5.5);

@@ -64,6 +64,7 @@ pub use crate::error::TableError;
 pub use format::*;
 pub use table::DiffusionTable;
 
+use crate::config::MetricKind;
 use crate::geometry::Point;
 
 /// The assisting metric of the planner (the paper's `d_A`).
@@ -75,6 +76,17 @@ pub trait Metric {
     /// Euclidean nearest neighbour and steers straight (paper Algorithm 2 with `d_A = d_E`).
     fn is_euclidean(&self) -> bool {
         false
+    }
+
+    /// Which kind of metric this is, for the planner's name ([`crate::Planner::name`]): the
+    /// paper's `d_E`, `d_D` or `d_G`, or [`MetricKind::Other`] (the default) for a metric of
+    /// the caller's own.
+    fn kind(&self) -> MetricKind {
+        if self.is_euclidean() {
+            MetricKind::Euclidean
+        } else {
+            MetricKind::Other
+        }
     }
 
     /// Work done by `distance` calls since the last `take_work`, in the planner's work units
@@ -132,6 +144,9 @@ impl<M: Metric + ?Sized> Metric for &M {
     }
     fn is_euclidean(&self) -> bool {
         (**self).is_euclidean()
+    }
+    fn kind(&self) -> MetricKind {
+        (**self).kind()
     }
     fn take_work(&self) -> u32 {
         (**self).take_work()

@@ -337,6 +337,9 @@ impl DiffusionTable<'_> {
 }
 
 impl Metric for DiffusionTable<'_> {
+    fn kind(&self) -> crate::config::MetricKind {
+        crate::config::MetricKind::Diffusion
+    }
     fn check_map(&self, grid: &crate::map::OccupancyGrid<'_>) -> Result<(), TableError> {
         DiffusionTable::check_map(self, grid)
     }

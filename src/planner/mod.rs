@@ -359,6 +359,12 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         })
     }
 
+    /// The planner's name in the paper's terms, from its configuration and its metric's kind
+    /// ([`Metric::kind`]): `Bi-AM-RRT*(D)`, `AM-RRT*(E)-2 tuned`.
+    pub fn name(&self) -> crate::config::PlannerName {
+        self.cfg.name(self.metric.kind())
+    }
+
     /// The configuration.
     pub fn config(&self) -> &Config {
         &self.cfg

@@ -2,7 +2,6 @@
 
 use super::*;
 use crate::clock::FakeClock;
-use crate::config::MetricKind;
 use crate::map::{OccupancyGrid, pack_grid};
 use crate::metric::Euclidean;
 use rand_core::SeedableRng;
@@ -18,7 +17,7 @@ fn meet_all_pairs_finds_a_free_pair_beyond_the_cheapest_sixteen() {
     let grid = OccupancyGrid::new(&bits, 40, 40, 1.0).unwrap();
     for all in [false, true] {
         let mut storage = Storage::<64, 16>::new();
-        let mut cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(40.0);
+        let mut cfg = Config::bi_am_rrt().with_sigma(40.0);
         cfg.as_printed.meet_all_pairs = all;
         let rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
         let mut p = Planner::<_, _, 64, 16, 0>::new(
@@ -65,7 +64,7 @@ fn regression_a_grafted_trunk_keeps_its_walled_edges() {
     let mut overlay = [0u8; OccupancyGrid::bytes_needed(40, 40)];
     let map = Map::new(grid).with_overlay(&mut overlay).unwrap();
     let mut storage = Storage::<64, 16>::new();
-    let cfg = Config::bi_am_rrt(MetricKind::Euclidean).with_sigma(40.0);
+    let cfg = Config::bi_am_rrt().with_sigma(40.0);
     let rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
     let mut p = Planner::<_, _, 64, 16, 2>::new(
         &mut storage,

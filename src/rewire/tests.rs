@@ -78,7 +78,7 @@ fn euclidean_env<'a, 'm>(map: &'a Map<'m, 1>, cfg: &'a Config) -> Env<'a, 'm, Eu
 fn open_map(bits: &mut [u8]) -> (Map<'_, 1>, Config) {
     pack_grid(bits, 20, 20, |_, _| false).unwrap();
     let map = Map::new(OccupancyGrid::new(bits, 20, 20, 1.0).unwrap());
-    (map, Config::bi_am_rrt(crate::MetricKind::Euclidean))
+    (map, Config::bi_am_rrt())
 }
 
 /// Issue 25, second round: a rewiring visit tested all its (up to 64) neighbours once
@@ -240,7 +240,7 @@ fn corner_cuts_pull_the_path_round_the_corner() {
     let meter = Meter::new(&clock);
     let mut lengths = [0.0f32; 2];
     for (cuts, length) in [false, true].into_iter().zip(&mut lengths) {
-        let paper = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+        let paper = Config::bi_am_rrt();
         let cfg = if cuts { paper.tuned() } else { paper };
         let env = euclidean_env(&map, &cfg);
         let mut store = TreeStore::<64, 16>::new();
@@ -272,7 +272,7 @@ fn path_shortcuts_straighten_the_path_and_keep_it_free() {
     // 20 x 20 m; a wall at row 10 over columns 0-11 (the way round is past column 12).
     let bits = wall_end();
     let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
-    let cfg = Config::bi_am_rrt(crate::MetricKind::Euclidean);
+    let cfg = Config::bi_am_rrt();
     let env = euclidean_env(&map, &cfg);
     let clock = FakeClock::new(1);
     let meter = Meter::new(&clock);

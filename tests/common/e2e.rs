@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use bi_am_rrt::builtin::Scenario;
 use bi_am_rrt::metric::DiffusionTable;
-use bi_am_rrt::{Config, Euclidean, Map, Metric, MetricKind, Planner, Storage};
+use bi_am_rrt::{Config, Euclidean, Map, Metric, MetricKind, Named, Planner, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
@@ -39,15 +39,16 @@ pub fn run_with<M: Metric>(
     drive(&mut planner, &clock, s.goals[0], proto, |_, _, _| {})
 }
 
-pub fn run(cfg: Config, s: &Scenario, seed: u64, proto: Protocol) -> RunResult {
-    let cfg = test_config(cfg, s);
-    match cfg.metric {
+pub fn run(planner: Named, s: &Scenario, seed: u64, proto: Protocol) -> RunResult {
+    let cfg = test_config(planner.cfg, s);
+    match planner.metric {
         MetricKind::Euclidean => run_with(cfg, s, Euclidean, seed, proto),
         MetricKind::Diffusion => {
             let table = landmark_table(&s.grid, 8);
             run_with(cfg, s, DiffusionTable::new(&table).unwrap(), seed, proto)
         }
         MetricKind::Geodesic => run_with(cfg, s, Geodesic::new(s.grid), seed, proto),
+        MetricKind::Other => unreachable!("the tests' planners are Table 1's"),
     }
 }
 
@@ -57,7 +58,7 @@ pub fn all_twenty_reach(s: &Scenario) {
         ..Protocol::default()
     };
     let mut failures = Vec::new();
-    for cfg in Config::table1() {
+    for cfg in Named::table1() {
         let r = run(cfg, s, 7, proto);
         if !r.reached || r.collisions > 0 {
             failures.push(format!("{}: {r:?}", cfg.name()));

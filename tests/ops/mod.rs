@@ -150,8 +150,8 @@ fn run_with<M: Metric>(
     metric: M,
     b: &mut Bytes<'_>,
 ) -> Result<(), String> {
-    let configs = Config::table1();
-    let mut cfg = configs[b.u8() as usize % configs.len()];
+    let configs = bi_am_rrt::Named::table1();
+    let mut cfg = configs[b.u8() as usize % configs.len()].cfg;
     let (w, h) = (grid.width_m(), grid.height_m());
     let span = w.max(h);
     cfg.search.e_max = span * (0.01 + b.unit() * 0.3);

@@ -45,7 +45,7 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     field: &mut [u8],
     metric: M,
 ) -> u32 {
-    let mut cfg = black_box(Config::table1()[black_box(7usize) % 20]);
+    let mut cfg = black_box(bi_am_rrt::Named::table1()[black_box(7usize) % 20].cfg);
     cfg.motion = black_box(Motion {
         agent_speed: 1.0,
         period: 0.1,

@@ -124,7 +124,7 @@ pub fn planner(
     )
     .map_err(|_| BoardError::Scenario)?;
     let table = DiffusionTable::new(&scenario::TABLE).map_err(|_| BoardError::Scenario)?;
-    let base = Config::bi_am_rrt(MetricKind::Diffusion);
+    let base = Config::bi_am_rrt();
     let base = if tuned { base.tuned() } else { base };
     let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
     cfg.motion = motion;

@@ -41,7 +41,7 @@ fn main() -> ! {
     };
     defmt::info!(
         "{} on {=str}, {} MHz, t_exp {} ms",
-        defmt::Display2Format(&planner.config().name()),
+        defmt::Display2Format(&planner.name()),
         stm32f405_board::scenario::NAME,
         CORE_HZ / 1_000_000,
         planner.config().budget.t_exp.as_millis() as u32

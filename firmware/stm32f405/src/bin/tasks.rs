@@ -213,7 +213,7 @@ async fn planning(
     let mut held = 0u32;
     defmt::info!(
         "{} on {=str} (async), {} MHz, t_exp {} ms",
-        defmt::Display2Format(&planner.config().name()),
+        defmt::Display2Format(&planner.name()),
         scenario::NAME,
         CORE_HZ / 1_000_000,
         planner.config().budget.t_exp.as_millis() as u32
