@@ -543,10 +543,7 @@ impl Config {
     /// both per-call caps at least 1, the four probabilities in `[0, 1]`, and the motion's
     /// speeds, period and horizon, the body's radius and weight finite and not negative.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        match PARAMS.iter().find(|p| !p.keeps_rule(p.get(self))) {
-            Some(p) => Err(p.error()),
-            None => Ok(()),
-        }
+        params::check(self)
     }
 
     /// The paper's name of this configuration run with a metric of kind `metric` (a

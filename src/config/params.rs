@@ -105,17 +105,16 @@ impl Param {
         (self.get)(cfg)
     }
 
+    /// Sets the value as it is, without its rule (`None`: a value of another kind, or a
+    /// count too large for the field).
+    #[cfg(test)]
+    pub(super) fn set_value(&self, cfg: &mut Config, v: Value) -> Option<()> {
+        (self.set)(cfg, v)
+    }
+
     /// Whether `v` keeps this parameter's rule.
     pub fn keeps_rule(&self, v: Value) -> bool {
-        match (self.rule, v) {
-            (Rule::Any, _) => true,
-            (Rule::Positive, Value::Real(x)) => x.is_finite() && x > 0.0,
-            (Rule::NonNegative, Value::Real(x)) => x.is_finite() && x >= 0.0,
-            (Rule::Unit, Value::Real(x)) => (0.0..=1.0).contains(&x),
-            (Rule::AtLeastOne, Value::Count(n)) => n >= 1,
-            (Rule::NonZero, Value::Millis(d)) => !d.is_zero(),
-            _ => false,
-        }
+        holds(self.rule, v)
     }
 
     /// Sets the value from text (a number, a count, milliseconds, `true`/`false`), checking
@@ -147,6 +146,19 @@ impl Param {
             param: self.name,
             rule: self.rule,
         }
+    }
+}
+
+/// Whether `v` keeps `rule` (a value of another kind than the rule's never does).
+fn holds(rule: Rule, v: Value) -> bool {
+    match (rule, v) {
+        (Rule::Any, _) => true,
+        (Rule::Positive, Value::Real(x)) => x.is_finite() && x > 0.0,
+        (Rule::NonNegative, Value::Real(x)) => x.is_finite() && x >= 0.0,
+        (Rule::Unit, Value::Real(x)) => (0.0..=1.0).contains(&x),
+        (Rule::AtLeastOne, Value::Count(n)) => n >= 1,
+        (Rule::NonZero, Value::Millis(d)) => !d.is_zero(),
+        _ => false,
     }
 }
 
@@ -186,464 +198,197 @@ fn narrow(n: u32) -> Option<u16> {
     u16::try_from(n).ok()
 }
 
-macro_rules! real {
-    ($name:literal, $group:literal, $unit:literal, $rule:ident, $doc:literal, $($f:ident).+) => {
-        Param {
-            name: $name,
-            group: $group,
-            unit: $unit,
-            rule: Rule::$rule,
-            doc: $doc,
-            get: |c| Value::Real(c.$($f).+),
-            set: |c, v| match v {
-                Value::Real(x) => {
-                    c.$($f).+ = x;
-                    Some(())
-                }
-                _ => None,
-            },
-        }
+// Each kind of value: how the table reads and writes it (`param!`), and how the validation
+// reads it (`value!`).
+macro_rules! value {
+    (real, $v:expr) => {
+        Value::Real($v)
+    };
+    (count16, $v:expr) => {
+        Value::Count(u32::from($v))
+    };
+    (count32, $v:expr) => {
+        Value::Count($v)
+    };
+    (millis, $v:expr) => {
+        Value::Millis($v)
+    };
+    (switch, $v:expr) => {
+        Value::Switch($v)
+    };
+    (faithful, $v:expr) => {
+        Value::Switch(matches!($v, RewireMode::Faithful))
+    };
+    (visits, $v:expr) => {
+        Value::Count(match $v {
+            RewireMode::PerExpansion { visits } => u32::from(visits),
+            RewireMode::Faithful => 0,
+        })
     };
 }
 
-macro_rules! count16 {
-    ($name:literal, $group:literal, $rule:ident, $doc:literal, $($f:ident).+) => {
-        Param {
-            name: $name,
-            group: $group,
-            unit: "",
-            rule: Rule::$rule,
-            doc: $doc,
-            get: |c| Value::Count(u32::from(c.$($f).+)),
-            set: |c, v| match v {
-                Value::Count(n) => {
-                    c.$($f).+ = narrow(n)?;
-                    Some(())
-                }
-                _ => None,
-            },
+macro_rules! store {
+    (real, $f:expr, $v:expr) => {
+        match $v {
+            Value::Real(x) => {
+                $f = x;
+                Some(())
+            }
+            _ => None,
         }
     };
-}
-
-macro_rules! count32 {
-    ($name:literal, $group:literal, $rule:ident, $doc:literal, $($f:ident).+) => {
-        Param {
-            name: $name,
-            group: $group,
-            unit: "",
-            rule: Rule::$rule,
-            doc: $doc,
-            get: |c| Value::Count(c.$($f).+),
-            set: |c, v| match v {
-                Value::Count(n) => {
-                    c.$($f).+ = n;
-                    Some(())
-                }
-                _ => None,
-            },
+    (count16, $f:expr, $v:expr) => {
+        match $v {
+            Value::Count(n) => {
+                $f = narrow(n)?;
+                Some(())
+            }
+            _ => None,
         }
     };
-}
-
-macro_rules! millis {
-    ($name:literal, $group:literal, $rule:ident, $doc:literal, $($f:ident).+) => {
-        Param {
-            name: $name,
-            group: $group,
-            unit: "ms",
-            rule: Rule::$rule,
-            doc: $doc,
-            get: |c| Value::Millis(c.$($f).+),
-            set: |c, v| match v {
-                Value::Millis(d) => {
-                    c.$($f).+ = d;
-                    Some(())
-                }
-                _ => None,
-            },
+    (count32, $f:expr, $v:expr) => {
+        match $v {
+            Value::Count(n) => {
+                $f = n;
+                Some(())
+            }
+            _ => None,
         }
     };
-}
-
-macro_rules! switch {
-    ($name:literal, $group:literal, $doc:literal, $($f:ident).+) => {
-        Param {
-            name: $name,
-            group: $group,
-            unit: "",
-            rule: Rule::Any,
-            doc: $doc,
-            get: |c| Value::Switch(c.$($f).+),
-            set: |c, v| match v {
-                Value::Switch(b) => {
-                    c.$($f).+ = b;
-                    Some(())
-                }
-                _ => None,
-            },
+    (millis, $f:expr, $v:expr) => {
+        match $v {
+            Value::Millis(d) => {
+                $f = d;
+                Some(())
+            }
+            _ => None,
         }
     };
-}
-
-/// Every configuration value, grouped as [`Config`] is.
-pub const PARAMS: [Param; 46] = [
-    // Table 1's two switches.
-    switch!(
-        "bidirectional",
-        "planner",
-        "grow a reverse tree from the goal until the trees meet (-1, Bi-)",
-        bidirectional
-    ),
-    switch!(
-        "new_rewiring",
-        "planner",
-        "the paper's new rewiring, Algorithms 4 and 6 (-2, Bi-)",
-        new_rewiring
-    ),
-    // Search.
-    real!(
-        "e_max",
-        "search",
-        "m",
-        Positive,
-        "longest edge of an expansion, and the Nearby radius (Table 2)",
-        search.e_max
-    ),
-    real!(
-        "e_search",
-        "search",
-        "m",
-        NonNegative,
-        "steering step while the tree's goal is not in it; 0: e_max",
-        search.e_search
-    ),
-    real!(
-        "sigma",
-        "search",
-        "m",
-        NonNegative,
-        "connection distance of the two trees (Table 2)",
-        search.sigma
-    ),
-    count16!(
-        "steer_candidates",
-        "search",
-        AtLeastOne,
-        "candidates of the stochastic steering",
-        search.steer_candidates
-    ),
-    count16!(
-        "sample_attempts",
-        "search",
-        AtLeastOne,
-        "rejection-sampling attempts for one free sample",
-        search.sample_attempts
-    ),
-    real!(
-        "p_goal",
-        "search",
-        "",
-        Unit,
-        "above this draw the goal is sampled while it is not in the tree",
-        search.p_goal
-    ),
-    real!(
-        "p_uniform",
-        "search",
-        "",
-        Unit,
-        "below this draw a uniform state, above it the informed ellipse",
-        search.p_uniform
-    ),
-    real!(
-        "p_beacon",
-        "search",
-        "",
-        Unit,
-        "share of samples near the path's nodes once the goal joined; 0: never",
-        search.p_beacon
-    ),
-    real!(
-        "p_gap",
-        "search",
-        "",
-        Unit,
-        "share of informed samples in the ellipse's narrow passages; 0: never",
-        search.p_gap
-    ),
-    // Rewiring.
-    millis!(
-        "t_root",
-        "rewiring",
-        Any,
-        "root rewiring budget per expansion (Table 2)",
-        rewiring.t_root
-    ),
-    millis!(
-        "t_goal",
-        "rewiring",
-        Any,
-        "goal (AM-RRT*) or random (RT-RRT*) rewiring budget per expansion (Table 2)",
-        rewiring.t_goal
-    ),
-    Param {
-        name: "faithful",
-        group: "rewiring",
-        unit: "",
-        rule: Rule::Any,
-        doc: "rewiring runs its full budgets after every expansion, as the reference (else `visits`)",
-        get: |c| Value::Switch(matches!(c.rewiring.mode, RewireMode::Faithful)),
-        set: |c, v| match v {
+    (switch, $f:expr, $v:expr) => {
+        match $v {
+            Value::Switch(b) => {
+                $f = b;
+                Some(())
+            }
+            _ => None,
+        }
+    };
+    // `faithful=false` leaves a per-expansion mode as it is, and turns the faithful one into
+    // the paper's named sets' `visits`.
+    (faithful, $f:expr, $v:expr) => {
+        match $v {
             Value::Switch(true) => {
-                c.rewiring.mode = RewireMode::Faithful;
+                $f = RewireMode::Faithful;
                 Some(())
             }
             Value::Switch(false) => {
-                if c.rewiring.mode == RewireMode::Faithful {
-                    c.rewiring.mode = RewireMode::PerExpansion {
+                if $f == RewireMode::Faithful {
+                    $f = RewireMode::PerExpansion {
                         visits: PAPER_VISITS,
                     };
                 }
                 Some(())
             }
             _ => None,
-        },
-    },
-    Param {
-        name: "visits",
-        group: "rewiring",
-        unit: "",
-        rule: Rule::Any,
-        doc: "node visits per rewiring phase and expansion (setting it ends `faithful`)",
-        get: |c| match c.rewiring.mode {
-            RewireMode::PerExpansion { visits } => Value::Count(u32::from(visits)),
-            RewireMode::Faithful => Value::Count(0),
-        },
-        set: |c, v| match v {
+        }
+    };
+    (visits, $f:expr, $v:expr) => {
+        match $v {
             Value::Count(n) => {
-                c.rewiring.mode = RewireMode::PerExpansion { visits: narrow(n)? };
+                $f = RewireMode::PerExpansion { visits: narrow(n)? };
                 Some(())
             }
             _ => None,
-        },
-    },
-    count16!(
-        "path_shortcuts",
-        "rewiring",
-        Any,
-        "path nodes offered their grandparent per expansion (Theta*'s step); 0: none",
-        rewiring.path_shortcuts
-    ),
-    real!(
-        "root_step",
-        "rewiring",
-        "m",
-        NonNegative,
-        "longest step of the root along the path; 0: to the next node (the paper)",
-        rewiring.root_step
-    ),
+        }
+    };
+}
+
+// The table, declared once: `PARAMS` (names, docs, readers and writers, for hosts: a firmware
+// that never sets values from text links none of it) and `check`, the validation
+// `Config::validate` runs (the rules and names only).
+macro_rules! table {
+    ($($kind:ident $name:literal, $group:literal, $unit:literal, $rule:ident, $doc:literal,
+        $($f:ident).+;)*) => {
+        /// Every configuration value, grouped as [`Config`] is.
+        pub const PARAMS: &[Param] = &[$(Param {
+            name: $name,
+            group: $group,
+            unit: $unit,
+            rule: Rule::$rule,
+            doc: $doc,
+            get: |c| value!($kind, c.$($f).+),
+            set: |c, v| store!($kind, c.$($f).+, v),
+        }),*];
+
+        /// The first value of `c` that breaks its rule, in the table's order.
+        pub(super) fn check(c: &Config) -> Result<(), ConfigError> {
+            $(
+                if !holds(Rule::$rule, value!($kind, c.$($f).+)) {
+                    return Err(ConfigError { param: $name, rule: Rule::$rule });
+                }
+            )*
+            Ok(())
+        }
+    };
+}
+
+table! {
+    // Table 1's two switches.
+    switch "bidirectional", "planner", "", Any, "grow a reverse tree from the goal until the trees meet (-1, Bi-)", bidirectional;
+    switch "new_rewiring", "planner", "", Any, "the paper's new rewiring, Algorithms 4 and 6 (-2, Bi-)", new_rewiring;
+    // Search.
+    real "e_max", "search", "m", Positive, "longest edge of an expansion, and the Nearby radius (Table 2)", search.e_max;
+    real "e_search", "search", "m", NonNegative, "steering step while the tree's goal is not in it; 0: e_max", search.e_search;
+    real "sigma", "search", "m", NonNegative, "connection distance of the two trees (Table 2)", search.sigma;
+    count16 "steer_candidates", "search", "", AtLeastOne, "candidates of the stochastic steering", search.steer_candidates;
+    count16 "sample_attempts", "search", "", AtLeastOne, "rejection-sampling attempts for one free sample", search.sample_attempts;
+    real "p_goal", "search", "", Unit, "above this draw the goal is sampled while it is not in the tree", search.p_goal;
+    real "p_uniform", "search", "", Unit, "below this draw a uniform state, above it the informed ellipse", search.p_uniform;
+    real "p_beacon", "search", "", Unit, "share of samples near the path's nodes once the goal joined; 0: never", search.p_beacon;
+    real "p_gap", "search", "", Unit, "share of informed samples in the ellipse's narrow passages; 0: never", search.p_gap;
+    // Rewiring.
+    millis "t_root", "rewiring", "ms", Any, "root rewiring budget per expansion (Table 2)", rewiring.t_root;
+    millis "t_goal", "rewiring", "ms", Any, "goal (AM-RRT*) or random (RT-RRT*) rewiring budget per expansion (Table 2)", rewiring.t_goal;
+    faithful "faithful", "rewiring", "", Any, "rewiring runs its full budgets after every expansion, as the reference (else `visits`)", rewiring.mode;
+    visits "visits", "rewiring", "", Any, "node visits per rewiring phase and expansion (setting it ends `faithful`)", rewiring.mode;
+    count16 "path_shortcuts", "rewiring", "", Any, "path nodes offered their grandparent per expansion (Theta*'s step); 0: none", rewiring.path_shortcuts;
+    real "root_step", "rewiring", "m", NonNegative, "longest step of the root along the path; 0: to the next node (the paper)", rewiring.root_step;
     // Budget.
-    millis!(
-        "t_exp",
-        "budget",
-        NonZero,
-        "expansion time per plan call (Table 2)",
-        budget.t_exp
-    ),
-    count32!(
-        "max_expansions",
-        "budget",
-        AtLeastOne,
-        "hard cap on expansions per call, whatever the clock",
-        budget.max_expansions
-    ),
-    count32!(
-        "max_work",
-        "budget",
-        AtLeastOne,
-        "hard cap on a call's work units, whatever the clock",
-        budget.max_work
-    ),
-    count32!(
-        "clock_every",
-        "budget",
-        Any,
-        "work units between two clock readings; 0: at every check",
-        budget.clock_every
-    ),
-    count32!(
-        "clock_every_max",
-        "budget",
-        Any,
-        "above clock_every: readings paced by their cost up to this far apart",
-        budget.clock_every_max
-    ),
+    millis "t_exp", "budget", "ms", NonZero, "expansion time per plan call (Table 2)", budget.t_exp;
+    count32 "max_expansions", "budget", "", AtLeastOne, "hard cap on expansions per call, whatever the clock", budget.max_expansions;
+    count32 "max_work", "budget", "", AtLeastOne, "hard cap on a call's work units, whatever the clock", budget.max_work;
+    count32 "clock_every", "budget", "", Any, "work units between two clock readings; 0: at every check", budget.clock_every;
+    count32 "clock_every_max", "budget", "", Any, "above clock_every: readings paced by their cost up to this far apart", budget.clock_every_max;
     // Memory.
-    count16!(
-        "n_max",
-        "memory",
-        AtLeastOne,
-        "node density limit within the neighbourhood (Table 2)",
-        memory.n_max
-    ),
-    count16!(
-        "n_max_informed",
-        "memory",
-        Any,
-        "density limit inside the informed ellipse; 0: n_max",
-        memory.n_max_informed
-    ),
-    count16!(
-        "recycle_cover",
-        "memory",
-        Any,
-        "nodes a spatial-index bucket keeps through trades; 0: no such rule",
-        memory.recycle_cover
-    ),
+    count16 "n_max", "memory", "", AtLeastOne, "node density limit within the neighbourhood (Table 2)", memory.n_max;
+    count16 "n_max_informed", "memory", "", Any, "density limit inside the informed ellipse; 0: n_max", memory.n_max_informed;
+    count16 "recycle_cover", "memory", "", Any, "nodes a spatial-index bucket keeps through trades; 0: no such rule", memory.recycle_cover;
     // Motion.
-    real!(
-        "agent_speed",
-        "motion",
-        "m/s",
-        NonNegative,
-        "the agent's top speed; 0: not stated",
-        motion.agent_speed
-    ),
-    real!(
-        "period",
-        "motion",
-        "s",
-        NonNegative,
-        "seconds between two plan calls",
-        motion.period
-    ),
-    real!(
-        "horizon",
-        "motion",
-        "s",
-        NonNegative,
-        "seconds ahead a tree edge is judged against the obstacles' sweeps",
-        motion.horizon
-    ),
-    real!(
-        "obstacle_speed",
-        "motion",
-        "m/s",
-        NonNegative,
-        "top speed of any obstacle",
-        motion.obstacle_speed
-    ),
+    real "agent_speed", "motion", "m/s", NonNegative, "the agent's top speed; 0: not stated", motion.agent_speed;
+    real "period", "motion", "s", NonNegative, "seconds between two plan calls", motion.period;
+    real "horizon", "motion", "s", NonNegative, "seconds ahead a tree edge is judged against the obstacles' sweeps", motion.horizon;
+    real "obstacle_speed", "motion", "m/s", NonNegative, "top speed of any obstacle", motion.obstacle_speed;
     // Body.
-    real!(
-        "robot_radius",
-        "body",
-        "m",
-        NonNegative,
-        "the robot's radius (the map inflated for at least it); 0: a point",
-        robot_radius
-    ),
-    real!(
-        "clearance_weight",
-        "body",
-        "",
-        NonNegative,
-        "extra cost of a metre at the body's edge (needs a clearance field); 0: none",
-        clearance_weight
-    ),
+    real "robot_radius", "body", "m", NonNegative, "the robot's radius (the map inflated for at least it); 0: a point", robot_radius;
+    real "clearance_weight", "body", "", NonNegative, "extra cost of a metre at the body's edge (needs a clearance field); 0: none", clearance_weight;
     // Tactics (module `tactics`).
-    switch!(
-        "steer_fan",
-        "tactics",
-        "steering candidates spread evenly in angle",
-        tactics.steer_fan
-    ),
-    switch!(
-        "nearest_step",
-        "tactics",
-        "Nearest tests its node's view over the steering step only",
-        tactics.nearest_step
-    ),
-    switch!(
-        "reuse_tests",
-        "tactics",
-        "a segment tested in an expansion is not tested again in it",
-        tactics.reuse_tests
-    ),
-    switch!(
-        "rewire_after_join",
-        "tactics",
-        "no root rewiring before the goal joins",
-        tactics.rewire_after_join
-    ),
-    switch!(
-        "connect",
-        "tactics",
-        "RRT-Connect's greedy step between the trees while searching",
-        tactics.connect
-    ),
-    switch!(
-        "rewire_new",
-        "tactics",
-        "a node added inside the ellipse rewires its neighbours (RRT*'s step)",
-        tactics.rewire_new
-    ),
-    switch!(
-        "density_trades",
-        "tactics",
-        "a dense neighbourhood in the ellipse trades its worst leaf",
-        tactics.density_trades
-    ),
-    switch!(
-        "recycle_when_full",
-        "tactics",
-        "a full arena trades a leaf that cannot improve the path",
-        tactics.recycle_when_full
-    ),
-    switch!(
-        "corner_cuts",
-        "tactics",
-        "a path node hidden from its grandparent cuts the corner",
-        tactics.corner_cuts
-    ),
-    switch!(
-        "open_frontier",
-        "tactics",
-        "the goal-rewiring sweep enqueues every unseen neighbour untested",
-        tactics.open_frontier
-    ),
+    switch "steer_fan", "tactics", "", Any, "steering candidates spread evenly in angle", tactics.steer_fan;
+    switch "nearest_step", "tactics", "", Any, "Nearest tests its node's view over the steering step only", tactics.nearest_step;
+    switch "reuse_tests", "tactics", "", Any, "a segment tested in an expansion is not tested again in it", tactics.reuse_tests;
+    switch "rewire_after_join", "tactics", "", Any, "no root rewiring before the goal joins", tactics.rewire_after_join;
+    switch "connect", "tactics", "", Any, "RRT-Connect's greedy step between the trees while searching", tactics.connect;
+    switch "rewire_new", "tactics", "", Any, "a node added inside the ellipse rewires its neighbours (RRT*'s step)", tactics.rewire_new;
+    switch "density_trades", "tactics", "", Any, "a dense neighbourhood in the ellipse trades its worst leaf", tactics.density_trades;
+    switch "recycle_when_full", "tactics", "", Any, "a full arena trades a leaf that cannot improve the path", tactics.recycle_when_full;
+    switch "corner_cuts", "tactics", "", Any, "a path node hidden from its grandparent cuts the corner", tactics.corner_cuts;
+    switch "open_frontier", "tactics", "", Any, "the goal-rewiring sweep enqueues every unseen neighbour untested", tactics.open_frontier;
     // As printed (`AsPrinted`).
-    switch!(
-        "alg4_take",
-        "as_printed",
-        "Algorithm 4 dequeues x_r2 (else peeks it)",
-        as_printed.alg4_takes_x_r2
-    ),
-    switch!(
-        "alg6_take",
-        "as_printed",
-        "Algorithm 6 pops x_r2 (else peeks it)",
-        as_printed.alg6_takes_x_r2
-    ),
-    switch!(
-        "alg6_cost",
-        "as_printed",
-        "Algorithm 6's printed cost test (else the new edge's true cost)",
-        as_printed.alg6_cost
-    ),
-    switch!(
-        "alg6_clear",
-        "as_printed",
-        "Algorithm 6's printed clearing test (else the first kind's)",
-        as_printed.alg6_clear
-    ),
-    switch!(
-        "meet_all_pairs",
-        "as_printed",
-        "the Meet tests every pair within sigma (else the 16 cheapest)",
-        as_printed.meet_all_pairs
-    ),
-];
+    switch "alg4_take", "as_printed", "", Any, "Algorithm 4 dequeues x_r2 (else peeks it)", as_printed.alg4_takes_x_r2;
+    switch "alg6_take", "as_printed", "", Any, "Algorithm 6 pops x_r2 (else peeks it)", as_printed.alg6_takes_x_r2;
+    switch "alg6_cost", "as_printed", "", Any, "Algorithm 6's printed cost test (else the new edge's true cost)", as_printed.alg6_cost;
+    switch "alg6_clear", "as_printed", "", Any, "Algorithm 6's printed clearing test (else the first kind's)", as_printed.alg6_clear;
+    switch "meet_all_pairs", "as_printed", "", Any, "the Meet tests every pair within sigma (else the 16 cheapest)", as_printed.meet_all_pairs;
+}
 
 /// Node visits per phase of the paper's named sets ([`Config::new`]).
 pub const PAPER_VISITS: u16 = 24;

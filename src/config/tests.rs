@@ -174,7 +174,7 @@ fn every_value_changed() -> Config {
 fn the_table_holds_every_value() {
     let target = every_value_changed();
     let mut c = Config::paper();
-    for p in &PARAMS {
+    for p in PARAMS {
         // `faithful` and `visits` share one field: the target is off the faithful mode.
         if p.name != "faithful" {
             assert_ne!(
@@ -219,6 +219,24 @@ fn the_table_names_each_value_once_and_every_switch() {
     }
     let switches = PARAMS.iter().filter(|p| p.group == "as_printed").count();
     assert_eq!(switches, AsPrinted::NAMES.len());
+}
+
+/// The validation the table generates checks each value with a rule, and names it.
+#[test]
+fn validate_checks_every_rule_of_the_table() {
+    use crate::error::Rule;
+    for p in PARAMS.iter().filter(|p| p.rule != Rule::Any) {
+        let bad = match p.get(&Config::paper()) {
+            Value::Real(_) => Value::Real(f32::NAN),
+            Value::Count(_) => Value::Count(0),
+            Value::Millis(_) => Value::Millis(Duration::ZERO),
+            Value::Switch(_) => unreachable!("{}: a switch has no rule", p.name),
+        };
+        let mut c = Config::paper();
+        p.set_value(&mut c, bad).unwrap();
+        assert_eq!(c.validate(), Err(p.error()), "{}", p.name);
+        assert!(!p.keeps_rule(bad));
+    }
 }
 
 #[test]
