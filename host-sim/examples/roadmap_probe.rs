@@ -30,7 +30,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use bi_am_rrt::geometry::Point;
 use bi_am_rrt::map::OccupancyGrid;
-use host_sim::stats::median;
+use host_sim::results::stats::median;
 
 /// Nodes stand this far (in cells) off their corner, along the corner's diagonal.
 const OFFSET_CELLS: f32 = 0.6;
@@ -352,7 +352,7 @@ fn main() -> Result<()> {
         Some(d) => bench_figures(d)?,
         None => HashMap::new(),
     };
-    let scenarios = host_sim::maps::load_scenarios(&args.scenarios, args.maps.as_deref())?;
+    let scenarios = host_sim::scenario::load_scenarios(&args.scenarios, args.maps.as_deref())?;
     println!(
         "| map | nodes | edges | bytes | bake ms | per leg: query us (/ RRT-Connect), path / optimum |"
     );
@@ -371,7 +371,7 @@ fn main() -> Result<()> {
         let mut legs = Vec::new();
         let mut ratios = Vec::new();
         let mut missed = 0;
-        let starts = host_sim::optimum::leg_starts(s);
+        let starts = host_sim::metric::optimum::leg_starts(s);
         for (leg, (&from, &goal)) in starts.iter().zip(&s.goals).enumerate() {
             let mut sc = Scratch::default();
             let len = rm.query(&g, from, goal, &mut sc);
@@ -379,7 +379,7 @@ fn main() -> Result<()> {
             let mut batch = Vec::new();
             for _ in 0..21 {
                 if args.cold {
-                    host_sim::bench::flush_caches();
+                    host_sim::study::bench::flush_caches();
                 }
                 let t = Instant::now();
                 for _ in 0..reps {

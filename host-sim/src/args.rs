@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use bi_am_rrt::metric::ElementKind;
 use clap::{Args, ValueEnum};
-use host_sim::diffusion::{TableLayout, TableOptions};
-use host_sim::maps;
+use host_sim::metric::diffusion::{TableLayout, TableOptions};
+use host_sim::scenario;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub(crate) enum MetricArg {
@@ -57,7 +57,7 @@ pub(crate) struct BodyArgs {
 
 impl BodyArgs {
     /// The scenario for the robot these flags name (unchanged without them).
-    pub(crate) fn apply(&self, sc: maps::Scenario) -> Result<maps::Scenario> {
+    pub(crate) fn apply(&self, sc: scenario::Scenario) -> Result<scenario::Scenario> {
         let radius = self.robot_radius.unwrap_or(sc.robot_radius);
         let sc = if self.robot_radius.is_none() && !self.snap_to_room {
             sc
@@ -70,14 +70,17 @@ impl BodyArgs {
         }
     }
 
-    pub(crate) fn apply_all(&self, scs: Vec<maps::Scenario>) -> Result<Vec<maps::Scenario>> {
+    pub(crate) fn apply_all(
+        &self,
+        scs: Vec<scenario::Scenario>,
+    ) -> Result<Vec<scenario::Scenario>> {
         scs.into_iter().map(|s| self.apply(s)).collect()
     }
 }
 
 /// Refuses a clearance preference (`--clearance-margin`, or a scenario file's
 /// `clearance_margin_m`) on a command that cannot honour it, saying `why`.
-pub(crate) fn no_clearance(scs: &[maps::Scenario], why: &str) -> Result<()> {
+pub(crate) fn no_clearance(scs: &[scenario::Scenario], why: &str) -> Result<()> {
     match scs.iter().find(|s| s.clearance.is_some()) {
         Some(s) => bail!(
             "scenario {}: a clearance preference is not supported here: {why}",
@@ -103,12 +106,12 @@ pub(crate) struct TableArgs {
     max_bytes: usize,
     /// Diffusion bake: most memory it may use, in MiB (estimated before it starts; a larger
     /// bake is refused with its estimate).
-    #[arg(long, default_value_t = host_sim::diffusion::DEFAULT_MAX_MEMORY >> 20)]
+    #[arg(long, default_value_t = host_sim::metric::diffusion::DEFAULT_MAX_MEMORY >> 20)]
     max_memory: usize,
     /// Diffusion bake: compute the map on every free cell (`cells`), on the table's pieces
     /// (`pieces`), or `auto` (cells up to 65,536 free cells, pieces above).
     #[arg(long, value_enum, default_value = "auto")]
-    basis: host_sim::diffusion::BasisChoice,
+    basis: host_sim::metric::diffusion::BasisChoice,
     /// Diffusion table layout: `pieces` (one entry per connected free piece of a block,
     /// never across a wall) or `uniform` (one entry per block, the format-1 table).
     #[arg(long, value_enum, default_value = "pieces")]
@@ -130,16 +133,16 @@ impl TableArgs {
     }
 }
 
-pub(crate) fn load_map(spec: &str, resolution: Option<f32>) -> Result<maps::OwnedGrid> {
+pub(crate) fn load_map(spec: &str, resolution: Option<f32>) -> Result<scenario::OwnedGrid> {
     let mut grid = match spec.strip_prefix("builtin:") {
-        Some(name) => maps::builtin_by_name(name)?.map,
+        Some(name) => scenario::builtin_by_name(name)?.map,
         None if spec.ends_with(".yaml") || spec.ends_with(".yml") => {
             if resolution.is_some() {
                 bail!("--resolution is for PNG maps: a ROS map's YAML gives its own");
             }
-            maps::load_ros_yaml(&PathBuf::from(spec))?.grid
+            scenario::load_ros_yaml(&PathBuf::from(spec))?.grid
         }
-        None => maps::load_png(&PathBuf::from(spec))?,
+        None => scenario::load_png(&PathBuf::from(spec))?,
     };
     if let Some(r) = resolution {
         if !(r.is_finite() && r > 0.0) {
@@ -156,11 +159,11 @@ pub(crate) fn one_scenario(
     builtin: &str,
     scenarios: Option<PathBuf>,
     scenario: Option<String>,
-) -> Result<maps::Scenario> {
+) -> Result<scenario::Scenario> {
     Ok(match (scenarios, scenario) {
-        (Some(file), Some(name)) => maps::load_scenarios(&file, Some(&[name]))?.remove(0),
+        (Some(file), Some(name)) => scenario::load_scenarios(&file, Some(&[name]))?.remove(0),
         (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
         (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
-        (None, None) => maps::builtin_by_name(builtin)?,
+        (None, None) => scenario::builtin_by_name(builtin)?,
     })
 }

@@ -4,7 +4,7 @@
 
 use bi_am_rrt::Point;
 use bi_am_rrt::agent::Protocol;
-use host_sim::maps::{OwnedGrid, Scenario};
+use host_sim::scenario::{OwnedGrid, Scenario};
 
 /// A perfect maze of `n x n` rooms with 1-cell corridors and walls (`2n + 1` cells a side,
 /// cells of 1 m), carved by a seeded depth-first search; start and goal in opposite corners.
@@ -63,9 +63,12 @@ fn the_call_budget_follows_the_leg() {
     let protocol = Protocol::default();
     let long = prep.leg_calls(0, &protocol);
     let grid = prep.scenario.map.grid();
-    let length =
-        host_sim::graph::grid_path_length(&grid, prep.scenario.start, prep.scenario.goals[0])
-            .unwrap();
+    let length = host_sim::metric::graph::grid_path_length(
+        &grid,
+        prep.scenario.start,
+        prep.scenario.goals[0],
+    )
+    .unwrap();
     println!("leg 1: grid path {length:.1} m, {long} calls");
     assert!(length > 600.0, "a maze leg is long ({length} m)");
     let want = 4.0 * length / 0.7;
@@ -84,12 +87,12 @@ fn run_writes_each_goal_and_can_skip_the_optimum() {
     let go = |no_optimum: bool| -> Vec<serde_json::Value> {
         let dir = tempfile::tempdir().unwrap();
         let sc = maze(6, 3);
-        host_sim::run::run(&host_sim::run::RunArgs {
+        host_sim::study::run::run(&host_sim::study::run::RunArgs {
             scenario: sc,
             planner: "Bi-AM-RRT*(D) tuned".into(),
             all_goals: true,
             seed: 2,
-            clock: host_sim::clock::ClockKind::Virtual,
+            clock: host_sim::sim::clock::ClockKind::Virtual,
             obstacle: None,
             out: dir.path().to_path_buf(),
             animate: None,
@@ -122,11 +125,11 @@ fn run_writes_each_goal_and_can_skip_the_optimum() {
 fn the_optimum_of_a_one_cell_maze() {
     let sc = maze(32, 11);
     let grid = sc.map.grid();
-    let corners = host_sim::optimum::Corners::of(&grid);
+    let corners = host_sim::metric::optimum::Corners::of(&grid);
     let (a, b) = (sc.start, sc.goals[0]);
     let t0 = std::time::Instant::now();
     let d = corners.shortest(a, b).unwrap();
-    let centre = host_sim::graph::grid_path_length(&grid, a, b).unwrap();
+    let centre = host_sim::metric::graph::grid_path_length(&grid, a, b).unwrap();
     println!(
         "maze 65: optimum {d:.3} m, grid path {centre:.3} m, {} corners, {:?}",
         corners.len(),
@@ -215,7 +218,7 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
             println!("skipped: {} is absent", path.display());
             continue;
         }
-        for s in host_sim::maps::load_scenarios(&path, None).unwrap() {
+        for s in host_sim::scenario::load_scenarios(&path, None).unwrap() {
             let prep = host_sim::sim::Prepared::new(s);
             let e_max = prep.fit(tuned).cfg.search.e_max;
             let named = prep.narrow_legs(e_max);
@@ -299,7 +302,7 @@ fn classes() -> Vec<Scenario> {
         // At 40 % the free cells come near the percolation threshold: the start and each
         // goal move to the cell of the largest component nearest to them (long legs across).
         let g = s.map.grid();
-        let comp = host_sim::graph::components(&g);
+        let comp = host_sim::metric::graph::components(&g);
         let cols = usize::from(g.cols());
         let mut size = std::collections::HashMap::new();
         for l in comp.iter().flatten() {
@@ -405,7 +408,7 @@ fn every_class_of_map_reaches_its_goals_or_names_them_first() {
             .take_while(|k| !named.contains(k))
             .collect();
         println!("{}: legs named first: {named:?}", prep.scenario.name);
-        let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
+        let clock = host_sim::sim::clock::virtual_clock(host_sim::sim::clock::VIRTUAL_NS_PER_UNIT);
         let cpu = std::time::Instant::now();
         let runs = with_planner(&prep, prep.fit(cfg), 1, |p| {
             drive(
@@ -467,7 +470,7 @@ fn regression_a_start_outside_the_largest_component_reaches_its_goal() {
     let prep = Prepared::new(s).without_optimum();
     let mut cfg = bi_am_rrt::Named::default();
     cfg.cfg.budget.t_exp = std::time::Duration::from_millis(5);
-    let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
+    let clock = host_sim::sim::clock::virtual_clock(host_sim::sim::clock::VIRTUAL_NS_PER_UNIT);
     let runs = with_planner(&prep, prep.fit(cfg), 1, |p| {
         drive(
             p,

@@ -1,6 +1,6 @@
 //! The simulator with a robot body (issue 41): a leg the disc cannot drive is refused when the
 //! scenario loads, naming it; `--snap-to-room` moves a start without room; `run` keeps the
-//! disc's clearance along the driven trail (measured by `host_sim::clearance`) and writes it
+//! disc's clearance along the driven trail (measured by `host_sim::metric::clearance`) and writes it
 //! with the trail to `result.json`; the door scenes run with a body; and, in the opt-in suite,
 //! the MovingAI maze that once counted a collision drives seeds 1-10 without one.
 
@@ -9,7 +9,7 @@ use std::path::Path;
 mod common;
 
 use bi_am_rrt::Point;
-use host_sim::maps::{OwnedGrid, Scenario};
+use host_sim::scenario::{OwnedGrid, Scenario};
 
 /// A 20 m x 10 m hall at 0.25 m cells split by a wall at x = 10 m with one door of `door` m.
 fn hall(door: f32) -> Scenario {
@@ -62,12 +62,12 @@ fn a_door_narrower_than_the_disc_is_refused_by_name() {
 fn run_keeps_the_disc_clear_and_writes_the_trail() {
     let dir = tempfile::tempdir().unwrap();
     let sc = hall(1.0).with_robot_radius(0.3).unwrap();
-    host_sim::run::run(&host_sim::run::RunArgs {
+    host_sim::study::run::run(&host_sim::study::run::RunArgs {
         scenario: sc.clone(),
         planner: "Bi-AM-RRT*(D) tuned".into(),
         all_goals: true,
         seed: 3,
-        clock: host_sim::clock::ClockKind::Virtual,
+        clock: host_sim::sim::clock::ClockKind::Virtual,
         obstacle: None,
         out: dir.path().to_path_buf(),
         animate: None,
@@ -96,7 +96,7 @@ fn run_keeps_the_disc_clear_and_writes_the_trail() {
             .map(|p| Point::new(p[0].as_f64().unwrap() as f32, p[1].as_f64().unwrap() as f32))
             .collect();
         assert!(trail.len() > 2);
-        let c = host_sim::clearance::trail_clearance(&sc.map.grid(), &trail).unwrap();
+        let c = host_sim::metric::clearance::trail_clearance(&sc.map.grid(), &trail).unwrap();
         assert!((c.min_m - least).abs() < 1e-6, "{c:?} vs {least}");
     }
     // Leg 1 goes through the door: the path is longer than the point's optimum would need.
@@ -110,12 +110,12 @@ fn run_keeps_the_disc_clear_and_writes_the_trail() {
 fn a_clearance_preference_keeps_the_trail_off_the_walls() {
     let p10 = |sc: Scenario| -> Vec<f64> {
         let dir = tempfile::tempdir().unwrap();
-        host_sim::run::run(&host_sim::run::RunArgs {
+        host_sim::study::run::run(&host_sim::study::run::RunArgs {
             scenario: sc,
             planner: "Bi-AM-RRT*(D) tuned".into(),
             all_goals: true,
             seed: 3,
-            clock: host_sim::clock::ClockKind::Virtual,
+            clock: host_sim::sim::clock::ClockKind::Virtual,
             obstacle: None,
             out: dir.path().to_path_buf(),
             animate: None,
@@ -149,7 +149,7 @@ fn a_clearance_preference_keeps_the_trail_off_the_walls() {
 /// or the rebaked map brings the disc within its radius of the closed door.
 #[test]
 fn door_scenes_run_with_a_body() {
-    use host_sim::moving::{Kind, MovingArgs, Treatment, moving};
+    use host_sim::study::moving::{Kind, MovingArgs, Treatment, moving};
     let dir = tempfile::tempdir().unwrap();
     let scenario = common::two_doors().with_robot_radius(0.3).unwrap();
     let prep = host_sim::sim::Prepared::new(scenario);
@@ -188,12 +188,12 @@ fn regression_maze512_no_collisions() {
         eprintln!("skipped: {} not found", file.display());
         return;
     }
-    let sc = host_sim::maps::load_scenarios(&file, Some(&["maze512_8_0".into()]))
+    let sc = host_sim::scenario::load_scenarios(&file, Some(&["maze512_8_0".into()]))
         .unwrap()
         .remove(0);
     let prep = host_sim::sim::Prepared::new(sc);
     prep.diffusion().unwrap();
-    let mut cfg = host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap()[0].cfg;
+    let mut cfg = host_sim::sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap()[0].cfg;
     cfg.cfg.budget.t_exp = std::time::Duration::from_millis(5);
     let goals: Vec<usize> = (0..prep.scenario.goals.len()).collect();
     let seeds: u64 = std::env::var("MAZE512_SEEDS")
@@ -203,7 +203,8 @@ fn regression_maze512_no_collisions() {
     let bad: Vec<String> = (1..=seeds)
         .into_par_iter()
         .flat_map_iter(|seed| {
-            let clock = host_sim::clock::virtual_clock(host_sim::clock::VIRTUAL_NS_PER_UNIT);
+            let clock =
+                host_sim::sim::clock::virtual_clock(host_sim::sim::clock::VIRTUAL_NS_PER_UNIT);
             let runs = host_sim::sim::with_planner(&prep, prep.fit(cfg), seed, |p| {
                 host_sim::sim::drive(
                     p,

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 mod common;
 
 use bi_am_rrt::builtin;
-use host_sim::clock::ClockKind;
-use host_sim::diffusion::{Options, TableOptions};
-use host_sim::experiment::{self, Existing, ExperimentArgs, Goals};
-use host_sim::graph::GridGraph;
-use host_sim::maps;
+use host_sim::metric::diffusion::{Options, TableOptions};
+use host_sim::metric::graph::GridGraph;
+use host_sim::scenario;
+use host_sim::sim::clock::ClockKind;
+use host_sim::study::experiment::{self, Existing, ExperimentArgs, Goals};
 
 /// Writes the built-in scenarios as PNG maps (black walls on white) plus a scenario file.
 fn write_builtin_file(dir: &Path) -> PathBuf {
@@ -52,26 +52,26 @@ fn write_builtin_file(dir: &Path) -> PathBuf {
 fn scenario_files_read_pngs_with_the_mean_rule() {
     let dir = tempfile::tempdir().unwrap();
     let file = write_builtin_file(dir.path());
-    let scs = maps::load_scenarios(&file, None).unwrap();
+    let scs = scenario::load_scenarios(&file, None).unwrap();
     assert_eq!(scs.len(), builtin::ALL.len());
     for (s, b) in scs.iter().zip(builtin::ALL) {
         assert_eq!(s.name, b.name);
-        assert_eq!(s.map, maps::OwnedGrid::from_grid(&b.grid), "{}", s.name);
+        assert_eq!(s.map, scenario::OwnedGrid::from_grid(&b.grid), "{}", s.name);
         assert_eq!(s.start, b.start);
         assert_eq!(s.goals, b.goals);
     }
-    let only = maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap();
+    let only = scenario::load_scenarios(&file, Some(&["maze".to_string()])).unwrap();
     assert_eq!(only.len(), 1);
-    assert!(maps::load_scenarios(&file, Some(&["nope".to_string()])).is_err());
+    assert!(scenario::load_scenarios(&file, Some(&["nope".to_string()])).is_err());
 }
 
 /// Experiment arguments with what the tests share (virtual clock, goal 1, one repeat from seed
 /// 1, two jobs, full pace, every switch off, no anytime run, each planner's own `t_exp`, an
 /// existing folder refused); a test sets what it is about with `..base_args(...)`.
-fn base_args(scenarios: Vec<maps::Scenario>, planners: &str, out: &Path) -> ExperimentArgs {
+fn base_args(scenarios: Vec<scenario::Scenario>, planners: &str, out: &Path) -> ExperimentArgs {
     ExperimentArgs {
         scenarios,
-        planners: host_sim::planners::parse_planners(planners).unwrap(),
+        planners: host_sim::sim::planners::parse_planners(planners).unwrap(),
         repeats: 1,
         clock: ClockKind::Virtual,
         goals: Goals::First,
@@ -108,7 +108,7 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
         no_optimum: false,
         search_only: true,
         ..base_args(
-            maps::load_scenarios(&file, Some(&["maze".to_string()])).unwrap(),
+            scenario::load_scenarios(&file, Some(&["maze".to_string()])).unwrap(),
             "AM-RRT*(E),Bi-AM-RRT*(E)",
             &out,
         )
@@ -134,7 +134,7 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
     }
     // A search-only folder's report counts goals found (it used to read "reached 0/2").
     let md = out.join("report.md");
-    host_sim::report::report(&out, &md, "report", None).unwrap();
+    host_sim::study::report::report(&out, &md, "report", None).unwrap();
     let md = std::fs::read_to_string(md).unwrap();
     assert!(md.contains("| planner | found |"), "{md}");
     assert!(md.contains("| AM-RRT*(E) | 2/2 |"), "{md}");
@@ -154,7 +154,7 @@ fn the_experiment_writes_one_row_per_run() {
         anytime_ms: 5,
         t_exp: Some(std::time::Duration::from_millis(5)),
         ..base_args(
-            maps::load_scenarios(&file, Some(&["open".to_string()])).unwrap(),
+            scenario::load_scenarios(&file, Some(&["open".to_string()])).unwrap(),
             "Bi-AM-RRT*(D),RT-RRT*",
             &out,
         )
@@ -238,7 +238,7 @@ fn seed_blocks_merge_into_one_matrix() {
         search_only: true,
         t_exp: Some(std::time::Duration::from_millis(5)),
         ..base_args(
-            maps::load_scenarios(&file, Some(&["maze".into()])).unwrap(),
+            scenario::load_scenarios(&file, Some(&["maze".into()])).unwrap(),
             "AM-RRT*(E),Bi-AM-RRT*(E)",
             out,
         )
@@ -290,7 +290,7 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
         shard: shard.map(|s| s.parse().unwrap()),
         existing,
         ..base_args(
-            maps::load_scenarios(&file, Some(&["open".into(), "maze".into()])).unwrap(),
+            scenario::load_scenarios(&file, Some(&["open".into(), "maze".into()])).unwrap(),
             "AM-RRT*(E),Bi-AM-RRT*(E)",
             out,
         )
@@ -358,7 +358,7 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     // The report of the merged folder: Fig. 6 (c) for the Bi- pair, box plots per map, the
     // tables, each chart as SVG and PNG.
     let md = dir.path().join("doc").join("results.md");
-    let r = host_sim::report::report(&merged, &md, "test", Some("Notes by hand.")).unwrap();
+    let r = host_sim::study::report::report(&merged, &md, "test", Some("Notes by hand.")).unwrap();
     let names: Vec<String> = r
         .charts
         .iter()
@@ -405,7 +405,7 @@ fn shared_maps() -> Option<PathBuf> {
 #[test]
 fn reference_maps_bake_to_accurate_tables() {
     let Some(file) = shared_maps() else { return };
-    let scs = maps::load_scenarios(
+    let scs = scenario::load_scenarios(
         &file,
         Some(&["bug_trap".into(), "maze".into(), "office".into()]),
     )
@@ -415,9 +415,12 @@ fn reference_maps_bake_to_accurate_tables() {
     for (s, (nodes, nnz)) in scs.iter().zip(expected) {
         let graph = GridGraph::build(&s.map.grid());
         assert_eq!(graph.len(), nodes, "{}", s.name);
-        let baked =
-            host_sim::bake::bake_diffusion(&s.map, &Options::default(), &TableOptions::default())
-                .unwrap();
+        let baked = host_sim::metric::bake::bake_diffusion(
+            &s.map,
+            &Options::default(),
+            &TableOptions::default(),
+        )
+        .unwrap();
         let r = &baked.map.report;
         assert_eq!(r.nonzeros, nnz, "{}", s.name);
         assert!((r.eigenvalues[0] - 1.0).abs() < 1e-12);
@@ -433,12 +436,13 @@ fn reference_maps_bake_to_accurate_tables() {
             coarsen: 1,
             ..TableOptions::default()
         };
-        let fine = host_sim::bake::bake_diffusion(&s.map, &Options::default(), &full).unwrap();
-        let e = host_sim::bake::table_error(&fine, 5_000, 3).unwrap();
+        let fine =
+            host_sim::metric::bake::bake_diffusion(&s.map, &Options::default(), &full).unwrap();
+        let e = host_sim::metric::bake::table_error(&fine, 5_000, 3).unwrap();
         assert!(e.max_abs <= e.bound, "{}: {e:?}", s.name);
         // The default (flash) table fits the 192 KiB budget.
         assert!(
-            baked.table.len() <= host_sim::diffusion::DEFAULT_MAX_BYTES,
+            baked.table.len() <= host_sim::metric::diffusion::DEFAULT_MAX_BYTES,
             "{}",
             s.name
         );
@@ -496,7 +500,7 @@ fn regression_bad_scenarios_and_maps_are_refused_with_a_reason() {
     let dir = tempfile::tempdir().unwrap();
     write_builtin_file(dir.path());
     let ok = "[m]\nfile = \"maze.png\"\nstart = [5.0, 5.0]\ngoals = [[55.0, 55.0]]\n";
-    assert!(maps::load_scenarios(&write_scenario(dir.path(), ok), None).is_ok());
+    assert!(scenario::load_scenarios(&write_scenario(dir.path(), ok), None).is_ok());
     let cases = [
         ("goals = []", "goals = []", "goals"),
         (
@@ -523,7 +527,7 @@ fn regression_bad_scenarios_and_maps_are_refused_with_a_reason() {
     ];
     for (what, goals, expect) in cases {
         let body = format!("[m]\nfile = \"maze.png\"\nstart = [5.0, 5.0]\n{goals}\n");
-        let err = maps::load_scenarios(&write_scenario(dir.path(), &body), None).unwrap_err();
+        let err = scenario::load_scenarios(&write_scenario(dir.path(), &body), None).unwrap_err();
         let msg = format!("{err:#}");
         assert!(msg.contains(expect), "{what}: {msg}");
     }
@@ -531,16 +535,16 @@ fn regression_bad_scenarios_and_maps_are_refused_with_a_reason() {
     image::GrayImage::from_pixel(20, 20, image::Luma([0]))
         .save(dir.path().join("black.png"))
         .unwrap();
-    let err = maps::load_png(&dir.path().join("black.png")).unwrap_err();
+    let err = scenario::load_png(&dir.path().join("black.png")).unwrap_err();
     assert!(format!("{err:#}").contains("dark"), "{err:#}");
     image::GrayImage::from_pixel(20, 20, image::Luma([255]))
         .save(dir.path().join("white.png"))
         .unwrap();
-    let white = maps::load_png(&dir.path().join("white.png")).unwrap();
+    let white = scenario::load_png(&dir.path().join("white.png")).unwrap();
     assert!(!white.grid().is_occupied(3, 3));
     // A huge image is refused from its header (it holds no pixel data to decode).
     png_header_only(&dir.path().join("huge.png"), 20_000, 20_000);
-    let err = maps::load_png(&dir.path().join("huge.png")).unwrap_err();
+    let err = scenario::load_png(&dir.path().join("huge.png")).unwrap_err();
     assert!(format!("{err:#}").contains("at most"), "{err:#}");
 }
 
@@ -549,7 +553,7 @@ fn regression_bad_scenarios_and_maps_are_refused_with_a_reason() {
 /// 1,000 of these.
 #[test]
 fn stress_runs_are_safe() {
-    let (sum, rows) = host_sim::stress::run(&host_sim::stress::StressArgs {
+    let (sum, rows) = host_sim::study::stress::run(&host_sim::study::stress::StressArgs {
         runs: 6,
         planners: vec![
             bi_am_rrt::Named::from_name("Bi-AM-RRT*(E)").unwrap(),
@@ -570,15 +574,16 @@ fn stress_runs_are_safe() {
 #[test]
 fn export_writes_a_grid_a_table_and_rust_source() {
     let dir = tempfile::tempdir().unwrap();
-    let sc = maps::builtin_by_name("maze").unwrap();
-    let ex = host_sim::bake::export_flash(&sc, &TableOptions::default(), dir.path()).unwrap();
+    let sc = scenario::builtin_by_name("maze").unwrap();
+    let ex =
+        host_sim::metric::bake::export_flash(&sc, &TableOptions::default(), dir.path()).unwrap();
     let grid = std::fs::read(dir.path().join("maze.grid")).unwrap();
     let table = std::fs::read(dir.path().join("maze.table")).unwrap();
     assert_eq!(grid, sc.map.bits);
     assert_eq!((ex.grid_bytes, ex.table_bytes), (grid.len(), table.len()));
     let t = bi_am_rrt::DiffusionTable::new(&table).unwrap();
     assert!(t.covers(sc.start));
-    assert!(table.len() <= host_sim::diffusion::DEFAULT_MAX_BYTES);
+    assert!(table.len() <= host_sim::metric::diffusion::DEFAULT_MAX_BYTES);
     let src = std::fs::read_to_string(&ex.source).unwrap();
     for item in [
         "pub static GRID: [u8; ",
@@ -599,10 +604,10 @@ fn export_writes_a_grid_a_table_and_rust_source() {
 /// obstacle radius out of range refused with the range (it was accepted and nothing dropped).
 #[test]
 fn regression_planner_names_and_obstacle_radius_are_checked() {
-    let p = host_sim::planners::parse_planners("bi-am-rrt*(d), rt-rrt*").unwrap();
+    let p = host_sim::sim::planners::parse_planners("bi-am-rrt*(d), rt-rrt*").unwrap();
     assert_eq!(p[0].name().to_string(), "Bi-AM-RRT*(D)");
     assert_eq!(p[1].name().to_string(), "RT-RRT*");
-    let e = host_sim::planners::parse_planners("AM-RRT*(X)")
+    let e = host_sim::sim::planners::parse_planners("AM-RRT*(X)")
         .unwrap_err()
         .to_string();
     assert!(
@@ -611,8 +616,8 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
     );
     let dir = tempfile::tempdir().unwrap();
     for r in [-2.0, 0.0, 1000.0, f32::NAN] {
-        let args = host_sim::run::RunArgs {
-            scenario: maps::builtin_by_name("open").unwrap(),
+        let args = host_sim::study::run::RunArgs {
+            scenario: scenario::builtin_by_name("open").unwrap(),
             planner: "Bi-AM-RRT*(E)".into(),
             all_goals: false,
             seed: 1,
@@ -624,7 +629,7 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
             pace: host_sim::results::Pace::Full,
             no_optimum: false,
         };
-        let e = host_sim::run::run(&args).unwrap_err().to_string();
+        let e = host_sim::study::run::run(&args).unwrap_err().to_string();
         assert!(
             e.contains("--obstacle") && e.contains("at most 10 m"),
             "{e}"
@@ -637,8 +642,8 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
 #[test]
 fn run_draws_every_moment() {
     let dir = tempfile::tempdir().unwrap();
-    let args = host_sim::run::RunArgs {
-        scenario: maps::builtin_by_name("bug_trap").unwrap(),
+    let args = host_sim::study::run::RunArgs {
+        scenario: scenario::builtin_by_name("bug_trap").unwrap(),
         planner: "Bi-AM-RRT*(E)".into(),
         all_goals: false,
         seed: 1,
@@ -650,7 +655,7 @@ fn run_draws_every_moment() {
         pace: host_sim::results::Pace::Full,
         no_optimum: false,
     };
-    host_sim::run::run(&args).unwrap();
+    host_sim::study::run::run(&args).unwrap();
     for f in [
         "meet.png",
         "found.png",
@@ -704,7 +709,7 @@ fn ros_maps_load_with_map_servers_rule() {
         )
     };
     std::fs::write(dir.path().join("m.yaml"), yaml("negate: 0\n")).unwrap();
-    let m = maps::load_ros_yaml(&dir.path().join("m.yaml")).unwrap();
+    let m = scenario::load_ros_yaml(&dir.path().join("m.yaml")).unwrap();
     let g = m.grid.grid();
     assert_eq!((g.cols(), g.rows(), g.cell_size()), (10, 6, 0.5));
     assert!(g.is_occupied(4, 1) && g.is_occupied(4, 4) && !g.is_occupied(4, 5));
@@ -713,19 +718,19 @@ fn ros_maps_load_with_map_servers_rule() {
     assert_eq!(m.ros_origin, Some([-2.0, 1.0]));
     // negate: 1 reads the grey levels the other way round (the wall becomes free).
     std::fs::write(dir.path().join("n.yaml"), yaml("negate: 1\n")).unwrap();
-    let n = maps::load_ros_yaml(&dir.path().join("n.yaml")).unwrap();
+    let n = scenario::load_ros_yaml(&dir.path().join("n.yaml")).unwrap();
     assert!(!n.grid.grid().is_occupied(4, 1) && n.grid.grid().is_occupied(0, 0));
     // A scenario in the map frame: (-1.75, 1.25) is the centre of the lower-left cell.
     let toml = "[ros]\nfile = \"m.yaml\"\nsize_m = [5, 3]\nstart = [-1.75, 1.25]\n\
                 goals = [[2.25, 3.75]]\n";
     std::fs::write(dir.path().join("s.toml"), toml).unwrap();
-    let sc = maps::load_scenarios(&dir.path().join("s.toml"), None).unwrap();
+    let sc = scenario::load_scenarios(&dir.path().join("s.toml"), None).unwrap();
     assert_eq!(sc[0].start, bi_am_rrt::Point::new(0.25, 2.75));
     assert_eq!(sc[0].goals[0], bi_am_rrt::Point::new(4.25, 0.25));
     // Refused, with the reason.
     for (extra, what) in [("negate: 2\n", "negate"), ("mode: raw\n", "mode")] {
         std::fs::write(dir.path().join("bad.yaml"), yaml(extra)).unwrap();
-        let e = maps::load_ros_yaml(&dir.path().join("bad.yaml")).unwrap_err();
+        let e = scenario::load_ros_yaml(&dir.path().join("bad.yaml")).unwrap_err();
         assert!(format!("{e:#}").contains(what), "{e:#}");
     }
     std::fs::write(
@@ -733,11 +738,11 @@ fn ros_maps_load_with_map_servers_rule() {
         "image: m.pgm\nresolution: 0.5\norigin: [0, 0, 0.5]\n",
     )
     .unwrap();
-    let e = maps::load_ros_yaml(&dir.path().join("yaw.yaml")).unwrap_err();
+    let e = scenario::load_ros_yaml(&dir.path().join("yaw.yaml")).unwrap_err();
     assert!(format!("{e:#}").contains("yaw"), "{e:#}");
     let bad = "[ros]\nfile = \"m.yaml\"\nresolution_m = 1.0\nstart = [-1.75, 1.25]\ngoals = [[2.25, 3.75]]\n";
     std::fs::write(dir.path().join("bad.toml"), bad).unwrap();
-    let e = maps::load_scenarios(&dir.path().join("bad.toml"), None).unwrap_err();
+    let e = scenario::load_scenarios(&dir.path().join("bad.toml"), None).unwrap_err();
     assert!(format!("{e:#}").contains("resolution_m"), "{e:#}");
 }
 
@@ -760,18 +765,18 @@ fn half_metre_cells_work_end_to_end() {
         goals.join(", ")
     );
     std::fs::write(dir.path().join("half.toml"), toml).unwrap();
-    let sc = maps::load_scenarios(&dir.path().join("half.toml"), None)
+    let sc = scenario::load_scenarios(&dir.path().join("half.toml"), None)
         .unwrap()
         .remove(0);
     assert_eq!(sc.map.grid().cell_size(), 0.5);
-    let full = host_sim::optimum::leg_optima(&maps::builtin_by_name("maze").unwrap());
-    let halved = host_sim::optimum::leg_optima(&sc);
+    let full = host_sim::metric::optimum::leg_optima(&scenario::builtin_by_name("maze").unwrap());
+    let halved = host_sim::metric::optimum::leg_optima(&sc);
     for (a, b) in full.iter().zip(&halved) {
         let (a, b) = (a.unwrap(), b.unwrap());
         assert!((b - 0.5 * a).abs() < 1e-4 * a, "{b} vs {a} / 2");
     }
     let out = dir.path().join("run");
-    host_sim::run::run(&host_sim::run::RunArgs {
+    host_sim::study::run::run(&host_sim::study::run::RunArgs {
         scenario: sc,
         planner: "Bi-AM-RRT*(D)".into(),
         all_goals: false,
@@ -806,7 +811,7 @@ fn optima_match_the_reference_figures() {
         eprintln!("skipped: {} not found", anchors.display());
         return;
     };
-    let scs = maps::load_scenarios(&file, None).unwrap();
+    let scs = scenario::load_scenarios(&file, None).unwrap();
     let mut checked = 0;
     for line in text.lines() {
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
@@ -819,7 +824,7 @@ fn optima_match_the_reference_figures() {
             continue;
         };
         let s = scs.iter().find(|s| s.name == *map).unwrap();
-        let got = host_sim::optimum::leg_optima(s)[k - 1].expect("reachable");
+        let got = host_sim::metric::optimum::leg_optima(s)[k - 1].expect("reachable");
         assert!(
             (got - want).abs() <= 0.0015,
             "{map} leg {k}: {got:.4} m, reference {want} m"
@@ -834,13 +839,14 @@ fn optima_match_the_reference_figures() {
 #[test]
 fn bench_measures_every_leg_variant_and_seed() {
     let dir = tempfile::tempdir().unwrap();
-    let s = maps::builtin_by_name("open").unwrap();
+    let s = scenario::builtin_by_name("open").unwrap();
     let legs = s.goals.len();
     let variants =
-        host_sim::planners::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8").unwrap();
+        host_sim::sim::planners::parse_variants("bi-am-rrt*(e),Bi-AM-RRT*(E) tuned@e_search=8")
+            .unwrap();
     assert_eq!(variants[1].name, "Bi-AM-RRT*(E) tuned@e_search=8");
     assert_eq!(variants[1].cfg.cfg.search.e_search, 8.0);
-    let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
+    let rows = host_sim::study::bench::run(&host_sim::study::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
         variants,
@@ -850,14 +856,14 @@ fn bench_measures_every_leg_variant_and_seed() {
         out: dir.path().to_path_buf(),
         table: TableOptions::default(),
         ompl: None,
-        clock: host_sim::bench::BenchClock::Virtual,
+        clock: host_sim::study::bench::BenchClock::Virtual,
         cold: false,
         until_first: false,
         grid: false,
     })
     .unwrap();
     assert_eq!(rows.len(), legs * 2 * 2);
-    let optima = host_sim::optimum::leg_optima(&s);
+    let optima = host_sim::metric::optimum::leg_optima(&s);
     for r in &rows {
         assert_eq!(Some(r.optimal_m), optima[r.leg - 1]);
         assert!(r.first_us.is_some(), "{r:?}");
@@ -871,7 +877,7 @@ fn bench_measures_every_leg_variant_and_seed() {
     for f in ["bench.csv", "summary.csv", "summary.md"] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
-    assert!(host_sim::planners::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
+    assert!(host_sim::sim::planners::parse_variants("Bi-AM-RRT*(E)@nope=1").is_err());
 }
 
 /// `bench` runs the grid planners on every leg by default (issue 42): A* and Theta* rows per
@@ -881,29 +887,29 @@ fn bench_measures_every_leg_variant_and_seed() {
 #[test]
 fn bench_runs_the_grid_planners_on_every_leg() {
     let dir = tempfile::tempdir().unwrap();
-    let s = maps::builtin_by_name("open").unwrap();
-    let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
+    let s = scenario::builtin_by_name("open").unwrap();
+    let rows = host_sim::study::bench::run(&host_sim::study::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
-        variants: host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        variants: host_sim::sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
         seeds: 2,
         budgets: vec![0.002],
         nodes: 2048,
         out: dir.path().to_path_buf(),
         table: TableOptions::default(),
         ompl: None,
-        clock: host_sim::bench::BenchClock::Virtual,
+        clock: host_sim::study::bench::BenchClock::Virtual,
         cold: true,
         until_first: false,
         grid: true,
     })
     .unwrap();
-    let of = |name: &str| -> Vec<&host_sim::bench::BenchRow> {
+    let of = |name: &str| -> Vec<&host_sim::study::bench::BenchRow> {
         rows.iter().filter(|r| r.planner == name).collect()
     };
     let (astar, theta) = (
-        of(host_sim::bench::GRID_ASTAR),
-        of(host_sim::bench::GRID_THETA_STAR),
+        of(host_sim::study::bench::GRID_ASTAR),
+        of(host_sim::study::bench::GRID_THETA_STAR),
     );
     assert_eq!(astar.len(), s.goals.len() * 2);
     assert_eq!(theta.len(), s.goals.len() * 2);
@@ -915,8 +921,8 @@ fn bench_runs_the_grid_planners_on_every_leg() {
     }
     let grid = std::fs::read_to_string(dir.path().join("grid.md")).unwrap();
     for g in [
-        host_sim::bench::GRID_ASTAR,
-        host_sim::bench::GRID_THETA_STAR,
+        host_sim::study::bench::GRID_ASTAR,
+        host_sim::study::bench::GRID_THETA_STAR,
     ] {
         assert!(
             grid.contains(&format!("| open | Bi-AM-RRT*(D) tuned | {g} |")),
@@ -931,11 +937,11 @@ fn bench_runs_the_grid_planners_on_every_leg() {
 #[test]
 fn bench_until_first_ends_each_run_at_its_first_solution() {
     let dir = tempfile::tempdir().unwrap();
-    let s = maps::builtin_by_name("open").unwrap();
-    let args = |until_first| host_sim::bench::BenchArgs {
+    let s = scenario::builtin_by_name("open").unwrap();
+    let args = |until_first| host_sim::study::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![],
-        variants: host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        variants: host_sim::sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
         seeds: 3,
         budgets: vec![0.002, 0.02],
         nodes: 2048,
@@ -944,13 +950,13 @@ fn bench_until_first_ends_each_run_at_its_first_solution() {
             .join(if until_first { "first" } else { "budgets" }),
         table: TableOptions::default(),
         ompl: None,
-        clock: host_sim::bench::BenchClock::Virtual,
+        clock: host_sim::study::bench::BenchClock::Virtual,
         cold: false,
         until_first,
         grid: false,
     };
-    let full = host_sim::bench::run(&args(false)).unwrap();
-    let first = host_sim::bench::run(&args(true)).unwrap();
+    let full = host_sim::study::bench::run(&args(false)).unwrap();
+    let first = host_sim::study::bench::run(&args(true)).unwrap();
     assert_eq!(first.len(), full.len());
     for (a, b) in first.iter().zip(&full) {
         assert_eq!((a.leg, a.seed), (b.leg, b.seed));
@@ -959,7 +965,8 @@ fn bench_until_first_ends_each_run_at_its_first_solution() {
         assert!(b.cost_ratio.iter().all(Option::is_some), "{b:?}");
         assert!(a.nodes <= b.nodes, "{a:?} {b:?}");
     }
-    let total = |rows: &[host_sim::bench::BenchRow]| rows.iter().map(|r| r.nodes).sum::<usize>();
+    let total =
+        |rows: &[host_sim::study::bench::BenchRow]| rows.iter().map(|r| r.nodes).sum::<usize>();
     assert!(total(&first) < total(&full));
 }
 
@@ -968,19 +975,19 @@ fn bench_until_first_ends_each_run_at_its_first_solution() {
 #[test]
 fn bench_runs_on_the_steady_clock() {
     let dir = tempfile::tempdir().unwrap();
-    let s = maps::builtin_by_name("open").unwrap();
+    let s = scenario::builtin_by_name("open").unwrap();
     let wall = std::time::Instant::now();
-    let rows = host_sim::bench::run(&host_sim::bench::BenchArgs {
+    let rows = host_sim::study::bench::run(&host_sim::study::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![1, 2],
-        variants: host_sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
+        variants: host_sim::sim::planners::parse_variants("Bi-AM-RRT*(D) tuned").unwrap(),
         seeds: 2,
         budgets: vec![0.002],
         nodes: 2048,
         out: dir.path().to_path_buf(),
         table: TableOptions::default(),
         ompl: None,
-        clock: host_sim::bench::BenchClock::Steady,
+        clock: host_sim::study::bench::BenchClock::Steady,
         cold: false,
         until_first: true,
         grid: false,
@@ -1002,7 +1009,7 @@ fn bench_runs_on_the_steady_clock() {
 fn bench_runs_the_ompl_harness_on_every_leg() {
     use std::os::unix::fs::PermissionsExt as _;
     let dir = tempfile::tempdir().unwrap();
-    let s = maps::builtin_by_name("open").unwrap();
+    let s = scenario::builtin_by_name("open").unwrap();
     let script = dir.path().join("harness.sh");
     // Arguments: LEGS.csv GRID_DIR SEEDS --planner P --budgets B MAP=WxH. Answers (after
     // checking that its inputs exist) for RRT-Connect seeds 1 and 2 solved in 7 and 9 us at
@@ -1022,22 +1029,22 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
     )
     .unwrap();
     std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let args = |seeds| host_sim::bench::BenchArgs {
+    let args = |seeds| host_sim::study::bench::BenchArgs {
         scenarios: vec![s.clone()],
         legs: vec![1, 2],
-        variants: host_sim::planners::parse_variants("bi-am-rrt*(e)").unwrap(),
+        variants: host_sim::sim::planners::parse_variants("bi-am-rrt*(e)").unwrap(),
         seeds,
         budgets: vec![0.002],
         nodes: 2048,
         out: dir.path().join("out"),
         table: TableOptions::default(),
         ompl: Some(script.clone()),
-        clock: host_sim::bench::BenchClock::Cpu,
+        clock: host_sim::study::bench::BenchClock::Cpu,
         cold: false,
         until_first: false,
         grid: false,
     };
-    let rows = host_sim::bench::run(&args(3)).unwrap();
+    let rows = host_sim::study::bench::run(&args(3)).unwrap();
     let ratios = std::fs::read_to_string(dir.path().join("out/ratios.md")).unwrap();
     assert!(
         ratios.contains("| open | Bi-AM-RRT*(E) |") && ratios.contains("(warm:"),
@@ -1045,7 +1052,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
     );
     let ompl: Vec<_> = rows
         .iter()
-        .filter(|r| r.planner == host_sim::bench::OMPL_RRT_CONNECT)
+        .filter(|r| r.planner == host_sim::study::bench::OMPL_RRT_CONNECT)
         .collect();
     assert_eq!(ompl.len(), 6);
     for r in &ompl {
@@ -1058,7 +1065,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
     }
     let simplified: Vec<_> = rows
         .iter()
-        .filter(|r| r.planner == host_sim::bench::OMPL_RRT_CONNECT_SIMPLIFIED)
+        .filter(|r| r.planner == host_sim::study::bench::OMPL_RRT_CONNECT_SIMPLIFIED)
         .collect();
     assert_eq!(simplified.len(), 6);
     assert!(
@@ -1068,7 +1075,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
     );
     let informed: Vec<_> = rows
         .iter()
-        .filter(|r| r.planner == host_sim::bench::OMPL_INFORMED_RRT_STAR)
+        .filter(|r| r.planner == host_sim::study::bench::OMPL_INFORMED_RRT_STAR)
         .collect();
     assert_eq!(informed.len(), 6);
     for r in &informed {
@@ -1099,7 +1106,7 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
         "{md}"
     );
     // Four seeds asked, three answered.
-    assert!(host_sim::bench::run(&args(4)).is_err());
+    assert!(host_sim::study::bench::run(&args(4)).is_err());
 }
 
 /// The soak on a built-in map for a second: goals come and go, every move is checked (a
@@ -1107,9 +1114,9 @@ fn bench_runs_the_ompl_harness_on_every_leg() {
 #[test]
 fn a_short_soak_changes_goals_and_stays_safe() {
     let dir = tempfile::tempdir().unwrap();
-    let rows = host_sim::soak::run(&host_sim::soak::SoakArgs {
-        scenario: maps::builtin_by_name("maze").unwrap(),
-        variant: host_sim::planners::parse_variants("Bi-AM-RRT*(E) tuned").unwrap()[0].clone(),
+    let rows = host_sim::study::soak::run(&host_sim::study::soak::SoakArgs {
+        scenario: scenario::builtin_by_name("maze").unwrap(),
+        variant: host_sim::sim::planners::parse_variants("Bi-AM-RRT*(E) tuned").unwrap()[0].clone(),
         seconds: 1.0,
         goal_every: 0.25,
         speed: 0.7,
@@ -1132,7 +1139,7 @@ fn docs_configuration_is_the_parameter_table() {
     let page = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/configuration.md");
     let committed = std::fs::read_to_string(&page).unwrap();
     assert!(
-        committed == host_sim::planners::reference(),
+        committed == host_sim::sim::planners::reference(),
         "docs/configuration.md is stale: cargo run -p host-sim -- params > docs/configuration.md"
     );
 }
@@ -1143,25 +1150,25 @@ fn docs_configuration_is_the_parameter_table() {
 fn every_parameter_is_an_override() {
     use bi_am_rrt::config::PARAMS;
     let base = "Bi-AM-RRT*(D) tuned";
-    for p in &PARAMS {
+    for p in PARAMS {
         let v = p.get(&bi_am_rrt::Config::paper()).to_string();
         let spec = format!("{base}@{}={v}", p.name);
-        let got = host_sim::planners::parse_variants(&spec).unwrap();
+        let got = host_sim::sim::planners::parse_variants(&spec).unwrap();
         assert_eq!(
             p.get(&got[0].cfg.cfg),
             p.get(&bi_am_rrt::Config::paper()),
             "{spec}"
         );
     }
-    let err = host_sim::planners::parse_variants(&format!("{base}@e_max=-2")).unwrap_err();
+    let err = host_sim::sim::planners::parse_variants(&format!("{base}@e_max=-2")).unwrap_err();
     assert!(
         format!("{err:#}").contains("e_max must be finite and positive"),
         "{err:#}"
     );
-    let err = host_sim::planners::parse_variants(&format!("{base}@emax=2")).unwrap_err();
+    let err = host_sim::sim::planners::parse_variants(&format!("{base}@emax=2")).unwrap_err();
     assert!(format!("{err:#}").contains("host-sim params"), "{err:#}");
     // The tactics, one by one.
-    let got = host_sim::planners::parse_variants(&format!("{base}@connect=false")).unwrap();
+    let got = host_sim::sim::planners::parse_variants(&format!("{base}@connect=false")).unwrap();
     let mut want = bi_am_rrt::Tactics::TUNED;
     want.connect = false;
     assert_eq!(got[0].cfg.cfg.tactics, want);
@@ -1188,7 +1195,7 @@ fn docs_results_is_the_report_of_its_data() {
             "host-sim report --results docs/{page}-data --out docs/{page}.md --notes docs/{page}-notes.md"
         );
         let data = docs.join(format!("{page}-data"));
-        host_sim::report::report(&data, &out, &command, Some(&notes)).unwrap();
+        host_sim::study::report::report(&data, &out, &command, Some(&notes)).unwrap();
         let made = std::fs::read_to_string(&out).unwrap();
         let committed = std::fs::read_to_string(docs.join(format!("{page}.md"))).unwrap();
         // The folder path in the text is the one given; the committed page was made from the
@@ -1227,7 +1234,8 @@ fn docs_results_is_the_report_of_its_data() {
     let notes = std::fs::read_to_string(docs.join("results-printed-notes.md")).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("results-printed.md");
-    host_sim::report::compare(&data.join("none"), &variants, &out, &command, Some(&notes)).unwrap();
+    host_sim::study::report::compare(&data.join("none"), &variants, &out, &command, Some(&notes))
+        .unwrap();
     let made = std::fs::read_to_string(&out)
         .unwrap()
         .replace(&data.display().to_string(), "docs/results-printed-data");
@@ -1257,7 +1265,7 @@ fn regression_a_disc_that_blocks_a_joined_path_does_not_starve_the_tree() {
             obstacle: Some(3.0),
             existing: Existing::Overwrite,
             ..base_args(
-                maps::load_scenarios(&file, Some(&["bug_trap".to_string()])).unwrap(),
+                scenario::load_scenarios(&file, Some(&["bug_trap".to_string()])).unwrap(),
                 planner,
                 &out,
             )
@@ -1290,7 +1298,7 @@ fn notes_quote_the_data_and_a_quote_it_cannot_answer_fails() {
     let out = dir.path().join("r.md");
     let good = "AM-RRT*(D)-2 on office: {{change|path|AM-RRT*(D)-2|office}}; \
                 -2 on maze {{scheme|path|-2|maze}}; nodes {{median|nodes_end|AM-RRT*(D)|bug_trap}}.";
-    host_sim::report::report(&data, &out, "cmd", Some(good)).unwrap();
+    host_sim::study::report::report(&data, &out, "cmd", Some(good)).unwrap();
     let page = std::fs::read_to_string(&out).unwrap();
     assert!(!page.contains("{{"), "every quote is filled");
     assert!(page.contains("AM-RRT*(D)-2 on office: "));
@@ -1302,7 +1310,7 @@ fn notes_quote_the_data_and_a_quote_it_cannot_answer_fails() {
         "{{median|speed|AM-RRT*(D)|office}}",
         "unclosed {{mean|path",
     ] {
-        let e = host_sim::report::report(&data, &out, "cmd", Some(bad));
+        let e = host_sim::study::report::report(&data, &out, "cmd", Some(bad));
         assert!(e.is_err(), "{bad} should not resolve");
     }
 }
@@ -1314,10 +1322,10 @@ fn notes_quote_the_data_and_a_quote_it_cannot_answer_fails() {
 #[test]
 fn a_map_baked_on_its_pieces_agrees_with_the_cell_bake() {
     use bi_am_rrt::Metric;
-    use host_sim::diffusion::BasisChoice;
+    use host_sim::metric::diffusion::BasisChoice;
     use rand_core::{Rng, SeedableRng};
     let Some(file) = shared_maps() else { return };
-    let sc = maps::load_scenarios(&file, Some(&["office".into()]))
+    let sc = scenario::load_scenarios(&file, Some(&["office".into()]))
         .unwrap()
         .remove(0);
     let bake = |basis| {
@@ -1325,7 +1333,7 @@ fn a_map_baked_on_its_pieces_agrees_with_the_cell_bake() {
             basis,
             ..TableOptions::default()
         };
-        host_sim::bake::bake_diffusion(&sc.map, &Options::default(), &o).unwrap()
+        host_sim::metric::bake::bake_diffusion(&sc.map, &Options::default(), &o).unwrap()
     };
     let (cells, pieces) = (bake(BasisChoice::Cells), bake(BasisChoice::Pieces));
     let (tc, tp) = (
@@ -1342,7 +1350,7 @@ fn a_map_baked_on_its_pieces_agrees_with_the_cell_bake() {
         a.push(tc.distance(pi, pj) as f64);
         b.push(tp.distance(pi, pj) as f64);
     }
-    let r = host_sim::diffusion::pearson(&a, &b);
+    let r = host_sim::metric::diffusion::pearson(&a, &b);
     let (rc, rp) = (cells.map.report.pearson, pieces.map.report.pearson);
     eprintln!(
         "office: {} pieces, Pearson(cells table, pieces table) {r:.4}; with graph distance \
@@ -1364,13 +1372,13 @@ fn run_lengths_follow_the_map() {
     for tuned in [false, true] {
         let named = if tuned { paper.tuned() } else { paper };
         // office_200: 200 m at 1 m cells.
-        let office = Prepared::new(maps::builtin_by_name("office_200").unwrap());
+        let office = Prepared::new(scenario::builtin_by_name("office_200").unwrap());
         assert_eq!(
             office.config(named),
             named.with_sigma(office.scenario.sigma())
         );
         // The small maze: 60 m, scale 0.6; 5 m x 0.6 = 3 m, kept at 4 cells (4 m).
-        let mut sc = maps::builtin_by_name("maze").unwrap();
+        let mut sc = scenario::builtin_by_name("maze").unwrap();
         let maze = Prepared::new(sc.clone());
         let c = maze.config(named);
         assert_eq!(c.search.e_max, 4.0);
@@ -1388,7 +1396,7 @@ fn run_lengths_follow_the_map() {
         } else {
             "Bi-AM-RRT*(D)"
         };
-        let hand = host_sim::planners::parse_variants(&format!("{spec}@e_max=8")).unwrap();
+        let hand = host_sim::sim::planners::parse_variants(&format!("{spec}@e_max=8")).unwrap();
         let c = hand[0].config_for(&maze).unwrap().cfg;
         assert_eq!(c.search.e_max, 8.0, "a length set by hand");
         sc.paper_lengths = true;
@@ -1416,9 +1424,9 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
          goals = [[37.5, 37.5]]\n",
     )
     .unwrap();
-    let load = || maps::load_scenarios(&dir.path().join("s.toml"), None).unwrap()[0].clone();
+    let load = || scenario::load_scenarios(&dir.path().join("s.toml"), None).unwrap()[0].clone();
     let spec = "Bi-AM-RRT*(D)";
-    let named = host_sim::planners::parse_variants(spec).unwrap()[0].clone();
+    let named = host_sim::sim::planners::parse_variants(spec).unwrap()[0].clone();
     // Fitted to the 40 m map (scale 0.4): e_max 5 m -> 2 m, kept at 4 cells (4 m); sigma 12 m.
     let fitted = Prepared::new(load());
     let c = named.config_for(&fitted).unwrap().cfg;
@@ -1435,8 +1443,8 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
         "Table 2's sigma with the paper's lengths"
     );
     // Overrides as written, whatever the named value.
-    let hand =
-        host_sim::planners::parse_variants("Bi-AM-RRT*(D)@e_max=5@sigma=7").unwrap()[0].clone();
+    let hand = host_sim::sim::planners::parse_variants("Bi-AM-RRT*(D)@e_max=5@sigma=7").unwrap()[0]
+        .clone();
     let c = hand.config_for(&fitted).unwrap().cfg;
     assert_eq!(c.search.e_max, 5.0, "@e_max=5 is 5 m, not the fitted 4 m");
     assert_eq!(c.search.sigma, 7.0, "@sigma=7 is kept");
@@ -1446,7 +1454,7 @@ fn regression_paper_lengths_keep_the_papers_sigma_and_overrides_are_taken_as_wri
 /// with the worst leg named; a leg we never solved is an infinite ratio, the worst.
 #[test]
 fn leg_ratios_take_the_median_and_the_worst_leg() {
-    use host_sim::bench::leg_ratios;
+    use host_sim::study::bench::leg_ratios;
     let ours = [(1, 2.0), (2, 3.0), (3, 10.0)];
     let theirs = [(1, 4.0), (2, 3.0), (3, 5.0), (4, 1.0)];
     assert_eq!(leg_ratios(&ours, &theirs), Some((1.0, 3, 2.0)));
@@ -1465,7 +1473,7 @@ fn leg_ratios_take_the_median_and_the_worst_leg() {
 /// rebuilds the summary and the chart from the folder.
 #[test]
 fn door_scenes_run_and_report() {
-    use host_sim::moving::{Kind, MovingArgs, Treatment, moving, report};
+    use host_sim::study::moving::{Kind, MovingArgs, Treatment, moving, report};
     let dir = tempfile::tempdir().unwrap();
     let scenario = common::two_doors();
     let prep = host_sim::sim::Prepared::new(scenario);

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::bake;
+use host_sim::metric::bake;
 
 use crate::args::*;
 

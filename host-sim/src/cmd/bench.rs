@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use host_sim::maps;
+use host_sim::scenario;
 
 use crate::args::*;
 
@@ -51,7 +51,7 @@ pub struct Cmd {
     /// the CPU time), or the virtual clock (work units, repeatable: for comparing
     /// algorithmic changes; its "us" are virtual).
     #[arg(long, value_enum, default_value = "cpu")]
-    clock: host_sim::bench::BenchClock,
+    clock: host_sim::study::bench::BenchClock,
     /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
     /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
     /// proportional to the map's size off that range; README "Lengths that follow the map").
@@ -105,7 +105,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         bail!("--budgets: every budget must be a positive number of seconds");
     }
     budgets.sort_by(f64::total_cmp);
-    let mut scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
+    let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
     no_clearance(
         &scs,
         "bench compares path costs with OMPL's, which are lengths",
@@ -113,8 +113,8 @@ pub fn main(cmd: Cmd) -> Result<()> {
     for s in &mut scs {
         s.paper_lengths = paper_lengths;
     }
-    let variants = host_sim::planners::parse_variants(&planners)?;
-    host_sim::bench::run(&host_sim::bench::BenchArgs {
+    let variants = host_sim::sim::planners::parse_variants(&planners)?;
+    host_sim::study::bench::run(&host_sim::study::bench::BenchArgs {
         scenarios: scs,
         legs: legs.unwrap_or_default(),
         variants,

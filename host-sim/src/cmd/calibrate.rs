@@ -15,5 +15,5 @@ pub struct Cmd {
 /// Runs the command.
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd { repeats } = cmd;
-    host_sim::growth::calibrate(repeats).context("calibrating")
+    host_sim::study::growth::calibrate(repeats).context("calibrating")
 }

@@ -50,7 +50,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         .chain(std::env::args().skip(1))
         .collect::<Vec<_>>()
         .join(" ");
-    host_sim::report::compare(&base, &vs, &out, &command, notes_text.as_deref())?;
+    host_sim::study::report::compare(&base, &vs, &out, &command, notes_text.as_deref())?;
     println!("wrote {}", out.display());
     Ok(())
 }

@@ -4,9 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::clock::ClockKind;
-use host_sim::experiment::{self, ExperimentArgs, Goals};
-use host_sim::maps;
+use host_sim::scenario;
+use host_sim::sim::clock::ClockKind;
+use host_sim::study::experiment::{self, ExperimentArgs, Goals};
 
 use crate::args::*;
 
@@ -135,7 +135,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         meet_all_pairs,
         obstacle,
     } = cmd;
-    let mut scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
+    let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
     for s in &mut scs {
         s.paper_lengths = paper_lengths;
     }
@@ -143,7 +143,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         wait_from_set,
         pace,
         no_optimum,
-        as_printed: host_sim::planners::parse_as_printed(&as_printed)?,
+        as_printed: host_sim::sim::planners::parse_as_printed(&as_printed)?,
         meet_all_pairs,
         obstacle,
         shard,
@@ -155,7 +155,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
             experiment::Existing::Refuse
         },
         scenarios: scs,
-        planners: host_sim::planners::parse_planners(&planners)?,
+        planners: host_sim::sim::planners::parse_planners(&planners)?,
         repeats,
         clock,
         goals,

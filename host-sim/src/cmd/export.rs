@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::bake;
-use host_sim::maps;
+use host_sim::metric::bake;
+use host_sim::scenario;
 
 use crate::args::*;
 
@@ -44,7 +44,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         table,
         flash_data,
     } = cmd;
-    let sc = body.apply(maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
+    let sc = body.apply(scenario::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
     no_clearance(
         std::slice::from_ref(&sc),
         "export does not write a clearance field yet (build one at start-up with bi_am_rrt::clearance::clearance_field)",

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use host_sim::maps;
+use host_sim::scenario;
 
 use crate::args::*;
 
@@ -38,13 +38,13 @@ pub fn main(cmd: Cmd) -> Result<()> {
         calls,
     } = cmd;
     let scs = match scenarios {
-        Some(file) => maps::load_scenarios(&file, names.as_deref())?,
-        None => maps::builtin_scenarios(),
+        Some(file) => scenario::load_scenarios(&file, names.as_deref())?,
+        None => scenario::builtin_scenarios(),
     };
     let scs = body.apply_all(scs)?;
-    let base = host_sim::planners::parse_planners(&planner)?
+    let base = host_sim::sim::planners::parse_planners(&planner)?
         .first()
         .copied()
         .context("no planner")?;
-    host_sim::bounds::print_frozen(scs, base, calls)
+    host_sim::study::bounds::print_frozen(scs, base, calls)
 }

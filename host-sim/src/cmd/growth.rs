@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::maps;
+use host_sim::scenario;
 
 use crate::args::*;
 
@@ -49,10 +49,10 @@ pub fn main(cmd: Cmd) -> Result<()> {
         seed,
         out,
     } = cmd;
-    let scs = body.apply_all(maps::load_scenarios(&scenarios, names.as_deref())?)?;
-    host_sim::growth::growth(
+    let scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
+    host_sim::study::growth::growth(
         &scs,
-        &host_sim::planners::parse_planners(&planners)?,
+        &host_sim::sim::planners::parse_planners(&planners)?,
         seconds,
         call_ms,
         seed,

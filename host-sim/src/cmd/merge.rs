@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::experiment;
+use host_sim::study::experiment;
 
 /// The options of `host-sim merge` (its description is the command's, in `main.rs`).
 #[derive(Args)]

@@ -31,7 +31,7 @@ pub struct Cmd {
         value_delimiter = ',',
         default_value = "crossing,head-on"
     )]
-    kinds: Vec<host_sim::moving::Kind>,
+    kinds: Vec<host_sim::study::moving::Kind>,
     /// Seeds per scene and treatment.
     #[arg(long, default_value_t = 10)]
     seeds: u64,
@@ -62,15 +62,15 @@ pub fn main(cmd: Cmd) -> Result<()> {
     } = cmd;
     let sc = one_scenario(&builtin, scenarios, scenario)?;
     let prep = host_sim::sim::Prepared::new(body.apply(sc)?);
-    host_sim::moving::moving(
+    host_sim::study::moving::moving(
         &prep,
-        &host_sim::moving::MovingArgs {
+        &host_sim::study::moving::MovingArgs {
             kinds,
             seeds,
             t_exp: std::time::Duration::from_millis(t_exp_ms),
             out,
             animate,
-            route_calls: host_sim::moving::ROUTE_CALLS,
+            route_calls: host_sim::study::moving::ROUTE_CALLS,
         },
     )?;
     Ok(())

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::maps;
+use host_sim::scenario;
 
 use crate::args::*;
 
@@ -31,7 +31,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         scenario,
         body,
     } = cmd;
-    let sc = body.apply(maps::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
-    host_sim::optimum::report(&sc);
+    let sc = body.apply(scenario::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
+    host_sim::metric::optimum::report(&sc);
     Ok(())
 }

@@ -10,6 +10,6 @@ pub struct Cmd {}
 
 /// Runs the command.
 pub fn main(_cmd: Cmd) -> Result<()> {
-    print!("{}", host_sim::planners::reference());
+    print!("{}", host_sim::sim::planners::reference());
     Ok(())
 }

@@ -43,8 +43,11 @@ pub fn main(cmd: Cmd) -> Result<()> {
         }
         None => None,
     };
-    if results.join(host_sim::moving::SETTINGS_FILE).exists() {
-        let charts = host_sim::moving::report(&results, &out, &command)?;
+    if results
+        .join(host_sim::study::moving::SETTINGS_FILE)
+        .exists()
+    {
+        let charts = host_sim::study::moving::report(&results, &out, &command)?;
         println!(
             "wrote {} and {} chart (SVG and PNG) of a moving run",
             out.display(),
@@ -52,7 +55,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         );
         return Ok(());
     }
-    let r = host_sim::report::report(&results, &out, &command, notes.as_deref())?;
+    let r = host_sim::study::report::report(&results, &out, &command, notes.as_deref())?;
     println!(
         "wrote {} and {} charts (SVG and PNG) in {}",
         r.markdown.display(),

@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::clock::ClockKind;
-use host_sim::run::{self, RunArgs};
+use host_sim::sim::clock::ClockKind;
+use host_sim::study::run::{self, RunArgs};
 
 use crate::args::*;
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use host_sim::maps;
+use host_sim::scenario;
 
 use crate::args::*;
 
@@ -66,12 +66,12 @@ pub fn main(cmd: Cmd) -> Result<()> {
     if !(minutes > 0.0 && goal_every > 0.0 && speed > 0.0) {
         bail!("--minutes, --goal-every and --speed must be positive");
     }
-    let mut scs = body.apply_all(maps::load_scenarios(&scenarios, Some(&[scenario]))?)?;
-    let variant = host_sim::planners::parse_variants(&planner)?
+    let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, Some(&[scenario]))?)?;
+    let variant = host_sim::sim::planners::parse_variants(&planner)?
         .into_iter()
         .next()
         .context("no planner")?;
-    host_sim::soak::run(&host_sim::soak::SoakArgs {
+    host_sim::study::soak::run(&host_sim::study::soak::SoakArgs {
         scenario: scs.remove(0),
         variant,
         seconds: minutes * 60.0,

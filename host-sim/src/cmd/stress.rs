@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::stress;
+use host_sim::study::stress;
 
 /// The options of `host-sim stress` (its description is the command's, in `main.rs`).
 #[derive(Args)]
@@ -44,7 +44,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     stress::run_and_report(
         &stress::StressArgs {
             runs,
-            planners: host_sim::planners::parse_planners(&planners)?,
+            planners: host_sim::sim::planners::parse_planners(&planners)?,
             seed,
             t_exp: std::time::Duration::from_millis(t_exp_ms),
             max_calls,

@@ -8,7 +8,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::draw::ok;
-use crate::stats::quantile;
+use crate::results::stats::quantile;
 
 /// Something drawable on any plotters backend.
 pub(crate) trait Chart {

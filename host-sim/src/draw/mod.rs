@@ -6,6 +6,8 @@
 //! A [`Scene`] is a snapshot taken from the planner (owned points, so a picture can be drawn
 //! after the planner moved on, and the reverse tree kept from before a meet cleared it).
 
+pub mod chart;
+
 use std::path::Path;
 
 use anyhow::{Context, Result, anyhow};
@@ -158,7 +160,7 @@ impl<'g> Painter<'g> {
     }
 
     /// A painter for a scenario's map, with its robot's body when it has one.
-    pub fn for_scenario(sc: &'g crate::maps::Scenario, target_px: u32) -> Self {
+    pub fn for_scenario(sc: &'g crate::scenario::Scenario, target_px: u32) -> Self {
         Self::new(sc.map.grid(), target_px).with_body(&sc.reach_grid(), sc.robot_radius)
     }
 

@@ -1,10 +1,10 @@
 //! The `bake` command: a map in, a metric table file out.
 //!
-//! - `diffusion`: the diffusion map ([`crate::diffusion`]) written in the core's table format
+//! - `diffusion`: the diffusion map ([`crate::metric::diffusion`]) written in the core's table format
 //!   (`bi_am_rrt::metric`), readable by `DiffusionTable::new` from a loaded file or an
 //!   `include_bytes!` in firmware; optionally also as Rust source with a `static` table.
 //! - `geodesic`: the grid graph in a small binary file (magic `BIAMGRPH`), from which the host's
-//!   geodesic metric computes exact distances ([`crate::metrics::Geodesic`]).
+//!   geodesic metric computes exact distances ([`crate::metric::Geodesic`]).
 
 use std::path::Path;
 use std::time::Instant;
@@ -13,16 +13,16 @@ use anyhow::{Context, Result, bail};
 use bi_am_rrt::Point;
 use bi_am_rrt::metric::fnv1a32;
 
-use crate::aggregate::{self, Aggregation, CellEdges, Coarse};
-use crate::diffusion::{self, BasisChoice, DiffusionMap, Options, TableOptions};
-use crate::graph::GridGraph;
-use crate::maps::{OwnedGrid, Scenario};
+use crate::metric::diffusion::aggregate::{self, Aggregation, CellEdges, Coarse};
+use crate::metric::diffusion::{self, BasisChoice, DiffusionMap, Options, TableOptions};
+use crate::metric::graph::GridGraph;
+use crate::scenario::{OwnedGrid, Scenario};
 
 /// What a diffusion map was computed on.
 pub enum Basis {
     /// The cell graph: one node per free cell (maps of at most 65,536 free cells).
     Cells(GridGraph),
-    /// The table's pieces ([`crate::aggregate`]): one node per table entry.
+    /// The table's pieces ([`crate::metric::diffusion::aggregate`]): one node per table entry.
     Pieces {
         /// The cell graph's edges.
         edges: CellEdges,
@@ -71,7 +71,7 @@ pub fn bake_memory(grid: &OwnedGrid, free: usize, on_cells: bool) -> usize {
 
 /// Builds the diffusion map of `grid` and writes its table: on the cell graph when the map
 /// has at most [`CELL_BASIS_MAX`] free cells, otherwise on the pieces of the table
-/// ([`crate::aggregate`]). Refuses, naming the knob, a bake whose estimated memory exceeds
+/// ([`crate::metric::diffusion::aggregate`]). Refuses, naming the knob, a bake whose estimated memory exceeds
 /// `table.max_memory` or whose table cannot fit `max_bytes`. Shows a progress bar on a
 /// terminal.
 pub fn bake_diffusion(grid: &OwnedGrid, opts: &Options, table: &TableOptions) -> Result<Baked> {
@@ -382,7 +382,7 @@ pub fn geodesic_costs(g: &GridGraph, samples: usize, all: bool) -> (f64, Option<
         g.dijkstra((k * 7919) % n.max(1), &mut dist);
         times.push(t0.elapsed().as_secs_f64());
     }
-    let per_field = crate::stats::median(&mut times).unwrap_or(0.0);
+    let per_field = crate::results::stats::median(&mut times).unwrap_or(0.0);
     let total = all.then(|| {
         let t0 = Instant::now();
         (0..n)
@@ -410,7 +410,7 @@ pub struct Exported {
 /// source that a firmware `include!`s: the grid and table as `static` byte arrays (flash), the
 /// grid's shape, the start, the goals and `sigma`.
 pub fn export_flash(
-    sc: &crate::maps::Scenario,
+    sc: &crate::scenario::Scenario,
     table: &TableOptions,
     dir: &Path,
 ) -> Result<Exported> {
@@ -670,7 +670,7 @@ mod tests {
     /// Issue 23: `export` of a nav2 map fits the firmware's flash or says why not.
     #[test]
     fn export_fits_the_firmware_flash_or_says_why_not() {
-        let mut sc = crate::maps::builtin_by_name("office_200").unwrap();
+        let mut sc = crate::scenario::builtin_by_name("office_200").unwrap();
         let auto = TableOptions::default();
         // The office: its own 128 KiB budget already fits.
         let t = flash_table_options(&sc, &auto, FIRMWARE_DATA_BYTES).unwrap();

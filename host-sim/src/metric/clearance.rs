@@ -163,7 +163,7 @@ pub fn trail_clearance(grid: &OccupancyGrid<'_>, trail: &[Point]) -> Option<Clea
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::maps::OwnedGrid;
+    use crate::scenario::OwnedGrid;
 
     #[test]
     fn distances_to_a_wall_and_the_edge() {

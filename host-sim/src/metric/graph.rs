@@ -28,10 +28,10 @@ pub fn neighbour_offsets() -> Vec<(i32, i32)> {
 /// The length in metres of a shortest 8-connected path over the free cells of `grid` from
 /// `a` through the centres of their cells to `b` (steps of 1 and sqrt 2 cells, a diagonal only
 /// between two free side cells), or `None` when there is none: the A* of
-/// [`crate::grid_planners::astar8`]. The agent protocol's call budget per leg follows it
+/// [`crate::metric::grid_planners::astar8`]. The agent protocol's call budget per leg follows it
 /// ([`crate::sim::Prepared::leg_calls`]).
 pub fn grid_path_length(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> Option<f64> {
-    crate::grid_planners::astar8(grid, a, b).map(|p| p.length_m)
+    crate::metric::grid_planners::astar8(grid, a, b).map(|p| p.length_m)
 }
 
 /// The connected components of the free cells (4-neighbours; the same components as the
@@ -263,7 +263,7 @@ impl GridGraph {
 #[cfg(test)]
 mod grid_path_tests {
     use super::*;
-    use crate::maps::OwnedGrid;
+    use crate::scenario::OwnedGrid;
 
     #[test]
     fn grid_path_length_goes_round_a_wall() {
@@ -295,7 +295,7 @@ mod grid_path_tests {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::maps::OwnedGrid;
+    use crate::scenario::OwnedGrid;
 
     #[test]
     fn offsets_and_small_graph() {

@@ -174,15 +174,15 @@ pub fn theta_star(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> Option<GridPa
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::maps::OwnedGrid;
-    use crate::optimum::Corners;
+    use crate::metric::optimum::Corners;
+    use crate::scenario::OwnedGrid;
 
     /// On random maps: A* is no shorter than the exact optimum, and Theta* lies between the
     /// optimum and A*'s length (any angle, but through cell centres); each path's segments are
     /// free by the core's test.
     #[test]
     fn grid_planners_bracket_the_optimum() {
-        let mut next = crate::optimum::xorshift(0x9e37_79b9_7f4a_7c15u64);
+        let mut next = crate::metric::optimum::xorshift(0x9e37_79b9_7f4a_7c15u64);
         let mut compared = 0;
         for case in 0..100 {
             let (w, h) = (10 + (next() % 30) as u16, 10 + (next() % 30) as u16);

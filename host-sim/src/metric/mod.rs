@@ -14,6 +14,15 @@
 //! (one unit per edge relaxed) is reported to the planner through `Metric::take_work`, so the
 //! virtual clock charges it.
 
+#[cfg(feature = "sim")]
+pub mod bake;
+pub mod clearance;
+#[cfg(feature = "sim")]
+pub mod diffusion;
+pub mod graph;
+pub mod grid_planners;
+pub mod optimum;
+
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -22,7 +31,7 @@ use std::sync::Arc;
 use bi_am_rrt::Point;
 use bi_am_rrt::metric::{DiffusionTable, Euclidean, Metric, Prepared};
 
-use crate::graph::GridGraph;
+use crate::metric::graph::GridGraph;
 
 /// `d_G` over a shared grid graph, with a per-target field cache (module docs).
 pub struct Geodesic {
@@ -161,7 +170,7 @@ impl Metric for AnyMetric<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::maps::OwnedGrid;
+    use crate::scenario::OwnedGrid;
 
     #[test]
     fn geodesic_goes_around_walls_and_caches() {

@@ -46,8 +46,8 @@ use std::collections::BinaryHeap;
 use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
 
-use crate::grid_planners::Open;
-use crate::maps::Scenario;
+use crate::metric::grid_planners::Open;
+use crate::scenario::Scenario;
 
 /// The lattice's unit step, and its diagonal rounded down (`lattice_to`).
 const LATTICE_UNIT: f64 = 64.0;
@@ -915,7 +915,7 @@ pub fn leg_optima(s: &Scenario) -> Vec<Option<f64>> {
 
 /// `host-sim optimum`: each leg's exact optimum and the CPU time it took, uncached, with a
 /// line per leg as it ends; beside it A* on the 8-connected grid and Theta* on the same cells
-/// ([`crate::grid_planners`]), their lengths / optimum and CPU times.
+/// ([`crate::metric::grid_planners`]), their lengths / optimum and CPU times.
 pub fn report(s: &Scenario) {
     let t0 = cpu_time::ThreadTime::now().as_duration().as_secs_f64();
     let grid = s.reach_grid();
@@ -930,10 +930,11 @@ pub fn report(s: &Scenario) {
         cpu_time::ThreadTime::now().as_duration().as_secs_f64() - t0
     );
     let cpu = || cpu_time::ThreadTime::now().as_duration().as_secs_f64();
-    type Planner = fn(&OccupancyGrid<'_>, Point, Point) -> Option<crate::grid_planners::GridPath>;
+    type Planner =
+        fn(&OccupancyGrid<'_>, Point, Point) -> Option<crate::metric::grid_planners::GridPath>;
     let planners: [(&str, Planner); 2] = [
-        ("A* (8-connected)", crate::grid_planners::astar8),
-        ("Theta*", crate::grid_planners::theta_star),
+        ("A* (8-connected)", crate::metric::grid_planners::astar8),
+        ("Theta*", crate::metric::grid_planners::theta_star),
     ];
     for (k, (a, b)) in leg_starts(s)
         .into_iter()
@@ -1027,7 +1028,7 @@ pub(crate) fn xorshift(mut state: u64) -> impl FnMut() -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::maps::OwnedGrid;
+    use crate::scenario::OwnedGrid;
 
     #[test]
     fn around_one_block() {

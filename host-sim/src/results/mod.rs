@@ -16,6 +16,8 @@
 //! `merge` joins folders whose settings are equal (shards of one matrix, or runs done on
 //! several machines) into one; a run present twice is an error.
 
+pub mod stats;
+
 use std::collections::BTreeSet;
 use std::fs::{self, File, OpenOptions};
 use std::io::Write as _;
@@ -24,9 +26,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::clock::ClockKind;
-use crate::maps::Scenario;
-use crate::stats::Spread;
+use crate::results::stats::Spread;
+use crate::scenario::Scenario;
+use crate::sim::clock::ClockKind;
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "experiment.json";

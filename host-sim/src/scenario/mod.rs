@@ -563,7 +563,7 @@ impl Scenario {
             // A goal the disc cannot reach (a passage narrower than its diameter) is refused
             // here, with the leg named, rather than searched for in vain.
             let space = self.reach_grid();
-            let parts = crate::graph::components(&space);
+            let parts = crate::metric::graph::components(&space);
             let part = |p: Point| {
                 space
                     .cell_of(p)
@@ -913,8 +913,11 @@ mod tests {
             assert_eq!(f32::from(g.cols()) * g.cell_size(), side, "{name}");
             assert_eq!(f32::from(g.rows()) * g.cell_size(), side, "{name}");
             assert!(s.goals.len() >= 5, "{name}");
-            let starts = crate::optimum::leg_starts(&s);
-            for (k, opt) in crate::optimum::leg_optima(&s).into_iter().enumerate() {
+            let starts = crate::metric::optimum::leg_starts(&s);
+            for (k, opt) in crate::metric::optimum::leg_optima(&s)
+                .into_iter()
+                .enumerate()
+            {
                 let opt = opt.unwrap_or_else(|| panic!("{name} leg {} unreachable", k + 1));
                 let straight = f64::from(starts[k].dist(s.goals[k]));
                 assert!(opt >= straight - 1e-3, "{name} leg {}", k + 1);

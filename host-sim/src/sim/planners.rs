@@ -195,7 +195,7 @@ pub fn reference() -> String {
          does.\n",
     );
     let mut group = "";
-    for p in &bi_am_rrt::config::PARAMS {
+    for p in bi_am_rrt::config::PARAMS {
         if p.group != group {
             group = p.group;
             let _ = write!(

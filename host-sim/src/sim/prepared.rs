@@ -2,8 +2,8 @@
 //! table), the planner type of the simulator, and one planner run through a goal sequence
 //! under the agent protocol of the core (`bi_am_rrt::agent`).
 
-use crate::clock::ClockKind;
 use crate::results::Row;
+use crate::sim::clock::ClockKind;
 use bi_am_rrt::RewireMode;
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
@@ -16,11 +16,11 @@ use bi_am_rrt::{Circle, Config, Map, MetricKind, Named, Planner, Point, Storage}
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
-use crate::bake::{Baked, bake_diffusion};
-use crate::diffusion::{Options, TableOptions};
-use crate::graph::GridGraph;
-use crate::maps::Scenario;
-use crate::metrics::{AnyMetric, Geodesic};
+use crate::metric::bake::{Baked, bake_diffusion};
+use crate::metric::diffusion::{Options, TableOptions};
+use crate::metric::graph::GridGraph;
+use crate::metric::{AnyMetric, Geodesic};
+use crate::scenario::Scenario;
 
 /// Nodes per tree in the simulator (office needs several thousand).
 pub const NODES: usize = 8192;
@@ -53,7 +53,7 @@ pub struct Prepared {
     pub no_optimum: bool,
     /// Each leg's 8-connected grid path over the cells with room, once computed
     /// ([`Prepared::grid_paths`]).
-    grid_paths: OnceLock<Vec<Option<crate::grid_planners::GridPath>>>,
+    grid_paths: OnceLock<Vec<Option<crate::metric::grid_planners::GridPath>>>,
     /// The straight pieces of each leg's exact shortest path, once computed
     /// ([`Prepared::warn_narrow_legs`]).
     pieces: OnceLock<Vec<Option<usize>>>,
@@ -112,35 +112,35 @@ impl Prepared {
     }
 
     /// Each leg's shortest 8-connected path over the cells with room
-    /// ([`crate::grid_planners::astar8`]; `None` for a leg without one), computed once.
-    pub fn grid_paths(&self) -> &[Option<crate::grid_planners::GridPath>] {
+    /// ([`crate::metric::grid_planners::astar8`]; `None` for a leg without one), computed once.
+    pub fn grid_paths(&self) -> &[Option<crate::metric::grid_planners::GridPath>] {
         self.grid_paths.get_or_init(|| {
             let grid = self.scenario.reach_grid();
-            let starts = crate::optimum::leg_starts(&self.scenario);
+            let starts = crate::metric::optimum::leg_starts(&self.scenario);
             starts
                 .iter()
                 .zip(&self.scenario.goals)
-                .map(|(&a, &b)| crate::grid_planners::astar8(&grid, a, b))
+                .map(|(&a, &b)| crate::metric::grid_planners::astar8(&grid, a, b))
                 .collect()
         })
     }
 
     /// The legs whose shortest grid path runs mostly (half or more) through passages
     /// narrower than `e_max / 4`, for at least 20 `e_max` (issue 42), with what their paths
-    /// run through ([`crate::grid_planners::passages`]): sampling trees, ours and OMPL's,
+    /// run through ([`crate::metric::grid_planners::passages`]): sampling trees, ours and OMPL's,
     /// cross long corridors of a few cells slowly. Measured: on a 129 x 129 maze of 1 m
     /// corridors (`scripts/gen-maps.py`), leg 1 (2.4 km through corridors one cell wide),
     /// neither the tuned set with `e_max` 1.2-5 m nor OMPL's RRT-Connect had a path after 10 s
     /// of CPU, where A* took 0.6 ms. Commands print [`narrow_warning`] for each before they
     /// run, so a user knows early; the run goes on.
-    pub fn narrow_legs(&self, e_max: f32) -> Vec<(usize, crate::grid_planners::Passages)> {
+    pub fn narrow_legs(&self, e_max: f32) -> Vec<(usize, crate::metric::grid_planners::Passages)> {
         let grid = self.scenario.reach_grid();
         let width = f64::from(e_max) / 4.0;
         self.grid_paths()
             .iter()
             .enumerate()
             .filter_map(|(k, p)| {
-                let p = crate::grid_planners::passages(&grid, p.as_ref()?, width);
+                let p = crate::metric::grid_planners::passages(&grid, p.as_ref()?, width);
                 (p.narrow_m >= 0.5 * p.length_m && p.narrow_m >= 20.0 * f64::from(e_max))
                     .then_some((k, p))
             })
@@ -161,8 +161,8 @@ impl Prepared {
         let pieces = self.pieces.get_or_init(|| {
             use rayon::prelude::*;
             let grid = self.scenario.reach_grid();
-            let corners = crate::optimum::Corners::of(&grid);
-            let starts = crate::optimum::leg_starts(&self.scenario);
+            let corners = crate::metric::optimum::Corners::of(&grid);
+            let starts = crate::metric::optimum::leg_starts(&self.scenario);
             starts
                 .par_iter()
                 .zip(&self.scenario.goals)
@@ -190,7 +190,7 @@ impl Prepared {
             if self.no_optimum {
                 vec![None; self.scenario.goals.len()]
             } else {
-                crate::optimum::leg_optima(&self.scenario)
+                crate::metric::optimum::leg_optima(&self.scenario)
             }
         })
     }
@@ -238,9 +238,9 @@ impl Prepared {
 
     /// A named configuration fitted to this scenario, the second of the three steps a run's
     /// configuration takes (named -> fitted -> the user's overrides,
-    /// [`crate::planners::Variant::config_for`]): `e_max`, `e_search` and `root_step` follow the
+    /// [`crate::sim::planners::Variant::config_for`]): `e_max`, `e_search` and `root_step` follow the
     /// map ([`Config::for_grid`]), or stay Table 2's metres with `paper_lengths`, and `sigma`
-    /// is the scenario's ([`crate::maps::Scenario::sigma`]). Every length is replaced: pass the
+    /// is the scenario's ([`crate::scenario::Scenario::sigma`]). Every length is replaced: pass the
     /// named configuration, and set lengths by hand after this step.
     pub fn config(&self, named: Config) -> Config {
         let mut c = named;
@@ -264,7 +264,7 @@ impl Prepared {
 
 /// Builds a planner for `prep` and hands it to `f`. `cfg` is what the planner gets, as it is
 /// (the robot's radius and clearance weight come from the scenario): fit a named
-/// configuration to the map first ([`Prepared::config`], or [`crate::planners::Variant::config_for`]
+/// configuration to the map first ([`Prepared::config`], or [`crate::sim::planners::Variant::config_for`]
 /// with overrides).
 pub fn with_planner<T>(
     prep: &Prepared,
@@ -543,7 +543,7 @@ pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<
         let (dx, dy) = (x - c.center.x, y - c.center.y);
         dx * dx + dy * dy <= r2
     };
-    let refined = crate::maps::OwnedGrid::from_fn(cols16, rows16, fine, |col, row| {
+    let refined = crate::scenario::OwnedGrid::from_fn(cols16, rows16, fine, |col, row| {
         let (col, row) = (u32::from(col), u32::from(row));
         let coarse = grid.is_occupied((col / split) as u16, (row / split) as u16);
         let (x0, y0) = (col as f32 * fine, row as f32 * fine);
@@ -551,14 +551,14 @@ pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<
         coarse || (inside(x0, y0) && inside(x1, y0) && inside(x0, y1) && inside(x1, y1))
     })
     .ok()?;
-    crate::optimum::Corners::of(&refined.grid()).shortest(a, b)
+    crate::metric::optimum::Corners::of(&refined.grid()).shortest(a, b)
 }
 
 /// The warning for leg `k` (0-based) of [`Prepared::narrow_legs`] for `e_max`; `budget` says
 /// what the planner has for it ("within the leg's 3000 calls").
 pub fn narrow_warning(
     k: usize,
-    p: &crate::grid_planners::Passages,
+    p: &crate::metric::grid_planners::Passages,
     e_max: f32,
     budget: &str,
     pieces: Option<usize>,
@@ -686,7 +686,7 @@ pub fn row_with_optimum(
 pub(crate) fn scene(
     p: &SimPlanner<'_, '_>,
     trail: &[Point],
-    scenario: &crate::maps::Scenario,
+    scenario: &crate::scenario::Scenario,
     active: usize,
     title: String,
 ) -> crate::draw::Scene {

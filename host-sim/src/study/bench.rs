@@ -3,7 +3,7 @@
 //! from `set_goal` to the goal joining the tree and the length of that first path, the tree's
 //! path cost after fixed CPU budgets (default 0.01, 0.1 and 1 s), nodes, expansions per second
 //! and clock readings per expansion. Lengths are divided by the leg's exact optimum
-//! ([`crate::optimum`]).
+//! ([`crate::metric::optimum`]).
 //!
 //! The planner only grows (`Planner::grow`, the agent stands at the leg's start): this is the
 //! static query OMPL's planners answer, measured the way `../shared/anchors/reference-figures.md`
@@ -23,12 +23,12 @@ use anyhow::{Context, Result, anyhow};
 use bi_am_rrt::Named;
 use serde::Serialize;
 
-use crate::clock::{CpuClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
-use crate::maps::Scenario;
-use crate::optimum::leg_starts;
-use crate::planners::Variant;
+use crate::metric::optimum::leg_starts;
+use crate::results::stats::median;
+use crate::scenario::Scenario;
+use crate::sim::clock::{CpuClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
+use crate::sim::planners::Variant;
 use crate::sim::{BUCKETS, Prepared, SizedPlanner, with_planner_in};
-use crate::stats::median;
 use bi_am_rrt::Storage;
 
 /// What to run.
@@ -48,7 +48,7 @@ pub struct BenchArgs {
     /// Output directory.
     pub out: PathBuf,
     /// Diffusion table layout.
-    pub table: crate::diffusion::TableOptions,
+    pub table: crate::metric::diffusion::TableOptions,
     /// OMPL's RRT-Connect harness (`benches/ompl`), run on every leg beside our planners.
     pub ompl: Option<PathBuf>,
     /// The planners' clock: thread CPU time, or the virtual clock (work units at
@@ -442,7 +442,7 @@ fn ompl_leg(
     Ok(rows)
 }
 
-/// The grid planners' names in the output ([`crate::grid_planners`]).
+/// The grid planners' names in the output ([`crate::metric::grid_planners`]).
 pub const GRID_ASTAR: &str = "A* (8-connected)";
 /// Theta*'s name in the output.
 pub const GRID_THETA_STAR: &str = "Theta*";
@@ -456,7 +456,7 @@ pub fn is_baseline(planner: &str) -> bool {
 /// time a median.
 const GRID_REPEATS: u64 = 5;
 
-/// A* on the 8-connected grid and Theta* on one leg ([`crate::grid_planners`]: the cells
+/// A* on the 8-connected grid and Theta* on one leg ([`crate::metric::grid_planners`]: the cells
 /// with room for the robot's body, as OMPL's and ours), `min(seeds, 5)` queries each, cold
 /// as ours unless `--warm`: one row per query, its thread CPU time as the first-solution time
 /// and its path / optimum as the first path (no costs at budgets: a grid planner's answer
@@ -474,11 +474,11 @@ fn grid_leg(
         bi_am_rrt::Point,
         bi_am_rrt::Point,
     ) -> Option<GridPath>;
-    use crate::grid_planners::GridPath;
+    use crate::metric::grid_planners::GridPath;
     let grid = s.reach_grid();
     let planners: [(&str, Plan); 2] = [
-        (GRID_ASTAR, crate::grid_planners::astar8),
-        (GRID_THETA_STAR, crate::grid_planners::theta_star),
+        (GRID_ASTAR, crate::metric::grid_planners::astar8),
+        (GRID_THETA_STAR, crate::metric::grid_planners::theta_star),
     ];
     let mut rows = Vec::new();
     for (name, plan) in planners {

@@ -108,7 +108,7 @@ fn measure<const N: usize, const B: usize>(
 }
 
 /// `host-sim frozen`: [`frozen`] on each scenario, printed as CSV lines.
-pub fn print_frozen(scs: Vec<crate::maps::Scenario>, base: Named, calls: u32) -> Result<()> {
+pub fn print_frozen(scs: Vec<crate::scenario::Scenario>, base: Named, calls: u32) -> Result<()> {
     println!(
         "map, planner, nodes, mode, calls, max units, median units, max CPU ms, median CPU ms, max expansions, cap"
     );

@@ -10,7 +10,7 @@
 //!   moving for that long, and the cost of its path to the goal is recorded (the paper does
 //!   not report this).
 
-use crate::planners::as_printed_names;
+use crate::sim::planners::as_printed_names;
 use crate::sim::{paper_pace, row};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
@@ -24,12 +24,12 @@ use bi_am_rrt::{Named, RewireMode};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
-use crate::maps::Scenario;
 pub use crate::results::Goals;
 use crate::results::{
     Manifest, MapTimes, Row, RowSink, RunKey, ScenarioId, Settings, Shard, Summary,
 };
+use crate::scenario::Scenario;
+use crate::sim::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::sim::{DiscTrack, Prepared, drive, with_planner};
 
 /// What to do with a results folder that already holds an experiment.
@@ -78,7 +78,7 @@ pub struct ExperimentArgs {
     /// Anytime measurement budget in ms (0: none).
     pub anytime_ms: u64,
     /// Diffusion table layout.
-    pub table: crate::diffusion::TableOptions,
+    pub table: crate::metric::diffusion::TableOptions,
     /// Overrides every planner's `t_exp` (the paper: 150 ms).
     pub t_exp: Option<Duration>,
     /// Only this slice of the matrix.
@@ -157,7 +157,7 @@ pub fn one_run(prep: &Prepared, cfg: Named, seed: u64, args: &ExperimentArgs) ->
     // Fig. 7: a disc dropped on goal 1's path (the first goal driven).
     let mut disc = args.obstacle.map(DiscTrack::new);
     let first = goals[0];
-    let leg_start = crate::optimum::leg_starts(&prep.scenario)[first];
+    let leg_start = crate::metric::optimum::leg_starts(&prep.scenario)[first];
     let mut track = |p: &mut crate::sim::SimPlanner<'_, '_>, gi: usize, agent, now_s: f64| {
         if let Some(d) = disc.as_mut().filter(|_| gi == first) {
             d.on_call(p, agent, leg_start, now_s);
@@ -277,7 +277,7 @@ fn prepare(
                 let t0 = Instant::now();
                 let graph = p.graph();
                 let graph_s = t0.elapsed().as_secs_f64();
-                let (geodesic_field_s, _) = crate::bake::geodesic_costs(&graph, 5, false);
+                let (geodesic_field_s, _) = crate::metric::bake::geodesic_costs(&graph, 5, false);
                 let t0 = Instant::now();
                 p.optima();
                 let optima_s = t0.elapsed().as_secs_f64();

@@ -10,14 +10,14 @@ use bi_am_rrt::clock::Clock;
 use bi_am_rrt::{Named, RewireMode};
 use serde::Serialize;
 
-use crate::clock::{VIRTUAL_NS_PER_UNIT, WallClock};
-use crate::maps::Scenario;
+use crate::results::stats::median;
+use crate::scenario::Scenario;
+use crate::sim::clock::{VIRTUAL_NS_PER_UNIT, WallClock};
 use crate::sim::{Prepared, drive, with_planner};
-use crate::stats::median;
 
 /// Measures wall nanoseconds per unit of planner work over a few built-in runs.
 pub fn calibrate(repeats: u32) -> Result<()> {
-    let preps: Vec<Prepared> = crate::maps::builtin_scenarios()
+    let preps: Vec<Prepared> = crate::scenario::builtin_scenarios()
         .into_iter()
         .map(Prepared::new)
         .collect();

@@ -52,12 +52,12 @@ use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chart::{BarPanel, Bars, render};
-use crate::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
+use crate::draw::chart::{BarPanel, Bars, render};
 use crate::draw::{Animation, Painter, Scene};
+use crate::results::stats::median;
+use crate::sim::clock::{VIRTUAL_NS_PER_UNIT, virtual_clock};
 use crate::sim::scene;
 use crate::sim::{Prepared, SimPlanner, with_live_planner, with_planner};
-use crate::stats::median;
 
 /// The agent's top speed, m/s.
 pub const AGENT_SPEED: f32 = 1.0;
@@ -387,7 +387,7 @@ struct Door {
     ends: (Point, Point),
 }
 
-fn door(map: &crate::maps::OwnedGrid, route: &[Point]) -> Result<Door> {
+fn door(map: &crate::scenario::OwnedGrid, route: &[Point]) -> Result<Door> {
     let grid = map.grid();
     let total: f32 = route.windows(2).map(|w| w[0].dist(w[1])).sum();
     // Doorways: walls within DOOR_REACH on both sides, narrowest first.
@@ -479,7 +479,7 @@ fn connected(grid: &bi_am_rrt::OccupancyGrid<'_>, a: Point, b: Point) -> bool {
 }
 
 /// The grid with the door closed.
-fn closed_grid(grid: &crate::maps::OwnedGrid, door: &Door) -> crate::maps::OwnedGrid {
+fn closed_grid(grid: &crate::scenario::OwnedGrid, door: &Door) -> crate::scenario::OwnedGrid {
     let mut g = grid.clone();
     for &(c, r) in &door.cells {
         let i = r as usize * g.width as usize + c as usize;
@@ -579,10 +579,10 @@ fn reported(w: &Walker, t: f32, treatment: Treatment) -> Moving {
 }
 
 /// Whether a robot of radius `r` moving along `a-b` touches an occupied cell of `grid` (for a
-/// point, the grid's own test; for a disc, exact distances: `host_sim::clearance`).
+/// point, the grid's own test; for a disc, exact distances: `host_sim::metric::clearance`).
 fn touches(grid: &bi_am_rrt::OccupancyGrid<'_>, a: Point, b: Point, r: f32) -> bool {
     if r > 0.0 {
-        crate::clearance::segment_clearance(grid, a, b) < f64::from(r) - 1e-4
+        crate::metric::clearance::segment_clearance(grid, a, b) < f64::from(r) - 1e-4
     } else {
         !grid.segment_free(a, b)
     }

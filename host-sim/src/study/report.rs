@@ -20,9 +20,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use plotters::prelude::*;
 
-use crate::chart::*;
+use crate::draw::chart::*;
+use crate::results::stats::{Spread, mean};
 use crate::results::{Manifest, Row, read_rows};
-use crate::stats::{Spread, mean};
 
 /// The paper's scheme of a planner name: `Original`, `-1`, `-2` or `Bi-`, and the name of
 /// its original planner.
@@ -193,7 +193,7 @@ fn pct(v: Option<f64>) -> String {
 /// A change with the Mann-Whitney p-value of the two samples behind it, e.g. `-0.4 % (p
 /// 0.62)`: a p above 0.05 means the change is within seed noise.
 fn pct_p(v: Option<f64>, orig: &[f64], new: &[f64]) -> String {
-    match (v, crate::stats::mann_whitney_p(orig, new)) {
+    match (v, crate::results::stats::mann_whitney_p(orig, new)) {
         (Some(c), Some(p)) => format!("{c:+.1} % (p {p:.2})"),
         (v, _) => pct(v),
     }
@@ -596,7 +596,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 );
                 let (ca, cb) = (cell(planner, a), cell(planner, b));
                 let (sa, sb) = (ca.measure(measure)?, cb.measure(measure)?);
-                let p = crate::stats::mann_whitney_p(sa, sb)
+                let p = crate::results::stats::mann_whitney_p(sa, sb)
                     .map_or(String::new(), |p| format!(" (p {p:.2})"));
                 return Ok(format!(
                     "{} -> {}{p}",
@@ -632,7 +632,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                             all += 1;
                             below += usize::from(c < 0.0);
                         }
-                        ps.extend(crate::stats::mann_whitney_p(a, b));
+                        ps.extend(crate::results::stats::mann_whitney_p(a, b));
                     }
                 }
                 let lo = ps.iter().copied().reduce(f64::min).context("no pairs")?;
@@ -860,7 +860,7 @@ pub fn compare(
                 let (bs, s) = (pick(&b).clone(), pick(&v).clone());
                 (
                     change(mean(&bs), mean(&s)),
-                    crate::stats::mann_whitney_p(&bs, &s),
+                    crate::results::stats::mann_whitney_p(&bs, &s),
                     bs,
                     s,
                 )
@@ -924,7 +924,7 @@ pub fn compare(
                     let v = cell(rows, p, m);
                     let s = pick(&v);
                     let c = change(mean(bs), mean(s));
-                    let p = crate::stats::mann_whitney_p(bs, s);
+                    let p = crate::results::stats::mann_whitney_p(bs, s);
                     let text = pct_p(c, bs, s);
                     if p.is_some_and(|p| p < 0.05) {
                         let _ = write!(md, " **{text}** |");

@@ -16,9 +16,9 @@ use std::time::Instant;
 use crate::results::Row;
 use crate::sim::row;
 
-use crate::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::draw::{self, Animation, Painter, Scene};
-use crate::maps::Scenario;
+use crate::scenario::Scenario;
+use crate::sim::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::sim::scene;
 use crate::sim::{GoalRun, Prepared, SimPlanner, drive_each, with_planner};
 
@@ -114,7 +114,7 @@ fn write_result(
         .iter()
         .map(|row| {
             let trail = &legs[row.goal_index - 1];
-            let c = crate::clearance::trail_clearance(&raw, trail);
+            let c = crate::metric::clearance::trail_clearance(&raw, trail);
             GoalJson {
                 row,
                 robot_radius_m: prep.scenario.robot_radius,
@@ -138,7 +138,7 @@ fn write_result(
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
     // A Table 1 name, optionally with the bench's `@field=value` overrides.
-    let variant = crate::planners::parse_variants(&args.planner)?
+    let variant = crate::sim::planners::parse_variants(&args.planner)?
         .into_iter()
         .next()
         .context("no planner named")?;
@@ -188,7 +188,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ClockKind::Wall => wall_clock.now() as f64 / wall_clock.ticks_per_second() as f64,
         ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
     };
-    let leg_starts = crate::optimum::leg_starts(&prep.scenario);
+    let leg_starts = crate::metric::optimum::leg_starts(&prep.scenario);
     let t_exp_ticks = virtual_clock.ticks(cfg.cfg.budget.t_exp);
     let call_end = std::cell::Cell::new(0u64);
     let mut pictures: Vec<String> = Vec::new();
@@ -433,7 +433,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let raw = prep.scenario.map.grid();
     let clearances: Vec<_> = rows
         .iter()
-        .map(|g| crate::clearance::trail_clearance(&raw, &legs[g.goal_index - 1]))
+        .map(|g| crate::metric::clearance::trail_clearance(&raw, &legs[g.goal_index - 1]))
         .collect();
     if prep.scenario.robot_radius > 0.0 {
         println!(

@@ -4,7 +4,7 @@
 //! forever stays healthy: nodes, path quality and time per call must stay flat.
 //!
 //! Per goal (one row of `soak.csv`): when it was set, its exact optimum from the agent's
-//! position then ([`crate::optimum`]), the CPU time until it joined the tree, and when the
+//! position then ([`crate::metric::optimum`]), the CPU time until it joined the tree, and when the
 //! next goal replaces it: `(travelled since set + planned cost left) / optimum`, the forward
 //! tree's size, the calls and their median and longest CPU time. Every move is checked against
 //! the map; a collision fails the run. Per minute, a line summarises the goals set in it.
@@ -19,12 +19,12 @@ use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 use serde::Serialize;
 
-use crate::clock::CpuClock;
-use crate::maps::Scenario;
-use crate::optimum::Corners;
-use crate::planners::Variant;
+use crate::metric::optimum::Corners;
+use crate::results::stats::median;
+use crate::scenario::Scenario;
+use crate::sim::clock::CpuClock;
+use crate::sim::planners::Variant;
 use crate::sim::{Prepared, SizedPlanner, with_planner_at};
-use crate::stats::median;
 
 /// What to run.
 pub struct SoakArgs {
@@ -45,7 +45,7 @@ pub struct SoakArgs {
     /// Output directory.
     pub out: PathBuf,
     /// Diffusion table layout.
-    pub table: crate::diffusion::TableOptions,
+    pub table: crate::metric::diffusion::TableOptions,
 }
 
 /// One goal of the soak.

@@ -19,8 +19,8 @@ use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::clock::VIRTUAL_NS_PER_UNIT;
-use crate::maps::builtin_scenarios;
+use crate::scenario::builtin_scenarios;
+use crate::sim::clock::VIRTUAL_NS_PER_UNIT;
 use crate::sim::{Prepared, with_planner};
 
 /// What to stress.

@@ -1,7 +1,7 @@
 //! Scenarios shared by the simulator's test files.
 
 use bi_am_rrt::Point;
-use host_sim::maps::{OwnedGrid, Scenario};
+use host_sim::scenario::{OwnedGrid, Scenario};
 
 /// Issue 27's door scenes' hall: 40 m x 30 m at 1 m cells, walled, split by a wall at x = 20 m
 /// with doorways at y 5-10 m (on the way from the start to the goal) and 20-25 m.

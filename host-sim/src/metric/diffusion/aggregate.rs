@@ -1,12 +1,12 @@
 //! The diffusion map of a large map, computed on the table's own pieces (issue 23).
 //!
 //! A version-2 table stores one entry per connected free piece of each `b x b` block of cells
-//! ([`crate::diffusion::Pieces`]). When the map has more free cells than a table can ever hold
+//! ([`crate::metric::diffusion::Pieces`]). When the map has more free cells than a table can ever hold
 //! entries (65,536), there is no point in solving the eigenproblem on the cells: the bake
 //! solves it on the pieces instead, so its cost follows the table's size, not the map's.
 //!
 //! The coarse problem is the Galerkin projection of the cell graph's (module
-//! [`crate::diffusion`]) onto vectors that are constant on each piece: with `P` the
+//! [`crate::metric::diffusion`]) onto vectors that are constant on each piece: with `P` the
 //! cell-to-piece aggregation, the coarse matrix is `P^T A2 P` (sums of the cell graph's `A2`
 //! entries between and within pieces) and its degrees `P^T D2 1`; the top eigenvectors, which
 //! are smooth over the map, are what such vectors represent well. Nothing joins two sides of a
@@ -16,7 +16,7 @@
 //! matrix itself.
 //!
 //! The cell graph is never stored: each cell keeps a 20-bit mask of its edges (the offsets of
-//! [`crate::graph::neighbour_offsets`], whose bounding box of cells is free), so memory is
+//! [`crate::metric::graph::neighbour_offsets`], whose bounding box of cells is free), so memory is
 //! about 20 bytes per cell plus the coarse graph. The time scale `t` is chosen against
 //! shortest paths of the piece graph (edges between the pieces' centroids).
 
@@ -27,8 +27,8 @@ use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
 use rayon::prelude::*;
 
-use crate::diffusion::{DiffusionMap, Options, Report, diffusion_of};
-use crate::graph::neighbour_offsets;
+use crate::metric::diffusion::{DiffusionMap, Options, Report, diffusion_of};
+use crate::metric::graph::neighbour_offsets;
 
 /// Bit of a cell's mask: the cell is a node of the graph (in its largest component).
 const NODE: u32 = 1 << 31;
@@ -49,7 +49,7 @@ pub struct CellEdges {
 }
 
 impl CellEdges {
-    /// The edges of `grid` (the rule of [`crate::graph::GridGraph`]), limited to its largest
+    /// The edges of `grid` (the rule of [`crate::metric::graph::GridGraph`]), limited to its largest
     /// component (ties to the first in row-major order).
     pub fn build(grid: &OccupancyGrid<'_>) -> Self {
         Self::build_keeping(grid, None)
@@ -253,7 +253,7 @@ pub struct Coarse {
 }
 
 impl Coarse {
-    /// Projects the cell graph's `A2` (module [`crate::diffusion`], steps 1-2) onto `agg`.
+    /// Projects the cell graph's `A2` (module [`crate::metric::diffusion`], steps 1-2) onto `agg`.
     pub fn project(edges: &CellEdges, agg: &Aggregation) -> Self {
         let r = edges.cell as f64;
         let kernel = |w_cells: f64| {
@@ -371,10 +371,10 @@ pub fn aggregated_map(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::bake_diffusion;
-    use crate::diffusion::{BasisChoice, TableOptions, diffusion_map};
-    use crate::graph::GridGraph;
-    use crate::maps::OwnedGrid;
+    use crate::metric::bake::bake_diffusion;
+    use crate::metric::diffusion::{BasisChoice, TableOptions, diffusion_map};
+    use crate::metric::graph::GridGraph;
+    use crate::scenario::OwnedGrid;
     use bi_am_rrt::{DiffusionTable, Metric};
 
     /// With blocks of one cell, the projection is the cell graph's own problem: the same
@@ -462,7 +462,7 @@ mod tests {
         assert!(format!("{e:#}").contains("--max-bytes"), "{e:#}");
         // The default budget follows the map: this 160,000-cell map bakes on its pieces.
         let b = bake_diffusion(&g, &Options::default(), &TableOptions::default()).unwrap();
-        assert!(matches!(b.basis, crate::bake::Basis::Pieces { .. }));
+        assert!(matches!(b.basis, crate::metric::bake::Basis::Pieces { .. }));
         assert!(b.table.len() <= TableOptions::default().budget(160_000));
         // The table is bound to the grid it was baked from (version 3).
         let t = DiffusionTable::new(&b.table).unwrap();

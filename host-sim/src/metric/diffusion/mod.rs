@@ -17,6 +17,8 @@
 //!    (Dijkstra) distance over 25 x 25 node pairs drawn with a seeded generator: a log-spaced
 //!    scan of `t` in `[1, 10^7]`, refined by golden-section search.
 
+pub mod aggregate;
+
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -27,8 +29,8 @@ use faer::{Mat, MatMut, Side};
 use rand_core::{Rng, SeedableRng};
 use rand_xorshift::XorShiftRng;
 
-use crate::aggregate::{Aggregation, CellEdges};
-use crate::graph::GridGraph;
+use crate::metric::diffusion::aggregate::{Aggregation, CellEdges};
+use crate::metric::graph::GridGraph;
 
 /// Options of the diffusion bake.
 #[derive(Clone, Copy, Debug)]
@@ -187,7 +189,7 @@ pub fn diffusion_map(graph: &GridGraph, opts: &Options) -> Result<DiffusionMap> 
 
 /// Steps 2 (from `D2`) to 5 for any symmetric `A2` given as rows with the diagonal, and
 /// coordinates multiplied by `mass` (the number of map cells the nodes stand for): the cell
-/// graph's own matrix, or the aggregated one of [`crate::aggregate`]. `dijkstra(src, dist)`
+/// graph's own matrix, or the aggregated one of [`crate::metric::diffusion::aggregate`]. `dijkstra(src, dist)`
 /// writes graph distances from `src` (any unit: only their correlation is used).
 pub(crate) fn diffusion_of(
     mut rows: Vec<Vec<(u32, f64)>>,
@@ -535,7 +537,7 @@ pub enum BasisChoice {
     Auto,
     /// Every free cell (memory and time grow with the map).
     Cells,
-    /// The table's pieces ([`crate::aggregate`]).
+    /// The table's pieces ([`crate::metric::diffusion::aggregate`]).
     Pieces,
 }
 
@@ -761,7 +763,7 @@ impl TableOptions {
         DEFAULT_MAX_BYTES + cells.div_ceil(2).saturating_sub(32 * 1024)
     }
 
-    /// The pieces a large map's table holds (module [`crate::aggregate`]): those of the
+    /// The pieces a large map's table holds (module [`crate::metric::diffusion::aggregate`]): those of the
     /// smallest block side whose table fits the budget, or of `coarsen` when it is set. An
     /// error names the knob when no block side up to 64 fits.
     pub fn aggregation(&self, edges: &CellEdges, dims: usize) -> Result<Aggregation> {
@@ -925,7 +927,7 @@ impl TableOptions {
 }
 
 /// Writes the pieces table (version 3 when `opts.map_hash` is set) of a diffusion map computed on the pieces `agg`
-/// ([`crate::aggregate`]): one entry per piece, its coordinates as computed.
+/// ([`crate::metric::diffusion::aggregate`]): one entry per piece, its coordinates as computed.
 pub fn aggregated_table_bytes(
     edges: &CellEdges,
     agg: &Aggregation,
@@ -1047,7 +1049,7 @@ fn representative(graph: &GridGraph, tc: u32, tr: u32, c: u32) -> Option<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::maps::OwnedGrid;
+    use crate::scenario::OwnedGrid;
 
     /// Issue 42: a 4,096-cell building at 0.05 m was refused by `run` ("no table fits
     /// 8486912 bytes: raise --max-bytes", a flag `run` does not have). A map of 2,048 x 2,048
@@ -1065,7 +1067,7 @@ mod tests {
             c % 2 == 0 && !((c % 4 == 0 && r % 256 == 63) || (c % 4 == 2 && r % 256 == 191))
         })
         .unwrap();
-        let edges = crate::aggregate::CellEdges::build(&g.grid());
+        let edges = crate::metric::diffusion::aggregate::CellEdges::build(&g.grid());
         let dims = Options::default().eigenpairs - 1;
         let auto = TableOptions::default();
         assert!(
