@@ -30,12 +30,12 @@ digest() { sha256sum | cut -c1-16; }
 
 echo "twin $(cargo run --release --quiet --example twin | digest)"
 echo "firmware-office $(digest <docs/firmware-office.txt)"
-"$sim" bench --scenarios "$scen" --clock virtual --seeds 2 --no-grid --out "$out/bench" >/dev/null
+"$sim" bench --planners paper --scenarios "$scen" --clock virtual --seeds 2 --no-grid --out "$out/bench" >/dev/null
 echo "bench $(digest <"$out/bench/bench.csv")"
 "$sim" moving --kinds door --seeds 2 --out "$out/moving" >/dev/null
 echo "moving-door $(digest <"$out/moving/runs.csv")"
 if [ "$quick" != --quick ]; then
-  "$sim" experiment --scenarios "$scen" --maps bug_trap,maze,office --repeats 1 \
+  "$sim" experiment --planners all --scenarios "$scen" --maps bug_trap,maze,office --repeats 1 \
     --clock virtual --out "$out/experiment" >/dev/null
   # run_wall_s is the last column: the wall time a run took.
   echo "experiment $(sed 's/,[^,]*$//' "$out/experiment/runs.csv" | digest)"

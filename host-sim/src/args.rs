@@ -167,3 +167,54 @@ pub(crate) fn one_scenario(
         (None, None) => scenario::builtin_by_name(builtin)?,
     })
 }
+
+/// The planners a command runs: one flag, one syntax and one default for every command
+/// (`host_sim::sim::planners::parse_variants`).
+#[derive(Args, Clone, Debug)]
+pub(crate) struct PlannerArgs {
+    /// Planners, comma-separated: `tuned` (the tuned Bi-AM-RRT*(D), the default), `paper`
+    /// (the paper's Bi-AM-RRT*(D)), `all` (Table 1's 20) or Table 1 names (any case, with or
+    /// without the suffix " tuned"), each optionally with `@field=value` overrides (any value
+    /// `host-sim params` lists), e.g. "tuned@e_max=8,paper". `--planner` is the old
+    /// spelling.
+    #[arg(
+        long = "planners",
+        alias = "planner",
+        value_name = "LIST",
+        default_value = host_sim::sim::planners::DEFAULT_PLANNERS
+    )]
+    planners: String,
+}
+
+impl PlannerArgs {
+    /// Every planner, with its overrides.
+    pub(crate) fn variants(&self) -> Result<Vec<host_sim::sim::planners::Variant>> {
+        host_sim::sim::planners::parse_variants(&self.planners)
+    }
+
+    /// Every planner, for a command that takes no overrides.
+    pub(crate) fn named(&self) -> Result<Vec<bi_am_rrt::Named>> {
+        host_sim::sim::planners::parse_planners(&self.planners)
+    }
+
+    /// The one planner of a command that runs one.
+    pub(crate) fn one(&self) -> Result<host_sim::sim::planners::Variant> {
+        host_sim::sim::planners::one(&self.planners)
+    }
+}
+
+/// Old spellings of options that still work for one release, each with the new one: a
+/// warning is printed when a command line uses one (`main`).
+pub(crate) const RENAMED: [(&str, &str); 1] = [("--planner", "--planners")];
+
+/// Warns about each old spelling in `args` ([`RENAMED`]).
+pub(crate) fn warn_renamed(args: &[String]) {
+    for (old, new) in RENAMED {
+        if args
+            .iter()
+            .any(|a| a == old || a.starts_with(&format!("{old}=")))
+        {
+            eprintln!("warning: {old} is now {new} ({old} goes in the next release)");
+        }
+    }
+}

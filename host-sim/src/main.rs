@@ -77,6 +77,7 @@ enum Command {
 }
 
 fn main() -> Result<()> {
+    args::warn_renamed(&std::env::args().collect::<Vec<_>>());
     match Cli::parse().command {
         Command::Run(c) => cmd::run::main(c),
         Command::Moving(c) => cmd::moving::main(c),

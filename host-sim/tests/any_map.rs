@@ -89,7 +89,7 @@ fn run_writes_each_goal_and_can_skip_the_optimum() {
         let sc = maze(6, 3);
         host_sim::study::run::run(&host_sim::study::run::RunArgs {
             scenario: sc,
-            planner: "Bi-AM-RRT*(D) tuned".into(),
+            planner: host_sim::sim::planners::one("Bi-AM-RRT*(D) tuned").unwrap(),
             all_goals: true,
             seed: 2,
             clock: host_sim::sim::clock::ClockKind::Virtual,

@@ -64,7 +64,7 @@ fn run_keeps_the_disc_clear_and_writes_the_trail() {
     let sc = hall(1.0).with_robot_radius(0.3).unwrap();
     host_sim::study::run::run(&host_sim::study::run::RunArgs {
         scenario: sc.clone(),
-        planner: "Bi-AM-RRT*(D) tuned".into(),
+        planner: host_sim::sim::planners::one("Bi-AM-RRT*(D) tuned").unwrap(),
         all_goals: true,
         seed: 3,
         clock: host_sim::sim::clock::ClockKind::Virtual,
@@ -112,7 +112,7 @@ fn a_clearance_preference_keeps_the_trail_off_the_walls() {
         let dir = tempfile::tempdir().unwrap();
         host_sim::study::run::run(&host_sim::study::run::RunArgs {
             scenario: sc,
-            planner: "Bi-AM-RRT*(D) tuned".into(),
+            planner: host_sim::sim::planners::one("Bi-AM-RRT*(D) tuned").unwrap(),
             all_goals: true,
             seed: 3,
             clock: host_sim::sim::clock::ClockKind::Virtual,

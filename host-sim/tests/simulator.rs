@@ -71,7 +71,7 @@ fn scenario_files_read_pngs_with_the_mean_rule() {
 fn base_args(scenarios: Vec<scenario::Scenario>, planners: &str, out: &Path) -> ExperimentArgs {
     ExperimentArgs {
         scenarios,
-        planners: host_sim::sim::planners::parse_planners(planners).unwrap(),
+        planners: host_sim::sim::planners::parse_variants(planners).unwrap(),
         repeats: 1,
         clock: ClockKind::Virtual,
         goals: Goals::First,
@@ -239,7 +239,7 @@ fn seed_blocks_merge_into_one_matrix() {
         t_exp: Some(std::time::Duration::from_millis(5)),
         ..base_args(
             scenario::load_scenarios(&file, Some(&["maze".into()])).unwrap(),
-            "AM-RRT*(E),Bi-AM-RRT*(E)",
+            "AM-RRT*(E),Bi-AM-RRT*(E)@e_max=6",
             out,
         )
     };
@@ -270,6 +270,14 @@ fn seed_blocks_merge_into_one_matrix() {
     assert_eq!(s.configs[1]["bidirectional"], "true");
     assert_eq!(s.configs[0]["bidirectional"], "false");
     assert_eq!(s.configs[0]["t_exp"], "5");
+    // An override is part of the planner's name and of its recorded configuration.
+    assert_eq!(s.planners[1], "Bi-AM-RRT*(E)@e_max=6");
+    assert_eq!(s.configs[1]["e_max"], "6");
+    assert!(
+        std::fs::read_to_string(merged.join("runs.csv"))
+            .unwrap()
+            .contains("Bi-AM-RRT*(E)@e_max=6")
+    );
     assert_eq!(s.configs[0].len(), bi_am_rrt::config::PARAMS.len());
     // A gap (seeds 3 and 5) and an overlap (4-5 and 5) are refused.
     assert!(host_sim::results::merge(&[a, c.clone()], &dir.path().join("gap")).is_err());
@@ -618,7 +626,7 @@ fn regression_planner_names_and_obstacle_radius_are_checked() {
     for r in [-2.0, 0.0, 1000.0, f32::NAN] {
         let args = host_sim::study::run::RunArgs {
             scenario: scenario::builtin_by_name("open").unwrap(),
-            planner: "Bi-AM-RRT*(E)".into(),
+            planner: host_sim::sim::planners::one("Bi-AM-RRT*(E)").unwrap(),
             all_goals: false,
             seed: 1,
             clock: ClockKind::Virtual,
@@ -644,7 +652,7 @@ fn run_draws_every_moment() {
     let dir = tempfile::tempdir().unwrap();
     let args = host_sim::study::run::RunArgs {
         scenario: scenario::builtin_by_name("bug_trap").unwrap(),
-        planner: "Bi-AM-RRT*(E)".into(),
+        planner: host_sim::sim::planners::one("Bi-AM-RRT*(E)").unwrap(),
         all_goals: false,
         seed: 1,
         clock: ClockKind::Virtual,
@@ -778,7 +786,7 @@ fn half_metre_cells_work_end_to_end() {
     let out = dir.path().join("run");
     host_sim::study::run::run(&host_sim::study::run::RunArgs {
         scenario: sc,
-        planner: "Bi-AM-RRT*(D)".into(),
+        planner: host_sim::sim::planners::one("Bi-AM-RRT*(D)").unwrap(),
         all_goals: false,
         seed: 2,
         clock: ClockKind::Virtual,
@@ -1130,6 +1138,39 @@ fn a_short_soak_changes_goals_and_stays_safe() {
     assert!(rows.iter().all(|r| r.nodes <= 2048 && r.optimal_m > 0.0));
     assert!(rows.iter().filter(|r| r.search_ms.is_some()).count() >= 3);
     assert!(dir.path().join("soak.csv").exists());
+}
+
+/// One planner syntax for every command: `tuned` (the default), `paper`, `all` and Table 1
+/// names, each with overrides; a command that runs one planner refuses several.
+#[test]
+fn one_planner_syntax_with_one_default() {
+    use host_sim::sim::planners::{DEFAULT_PLANNERS, one, parse_planners, parse_variants};
+    let tuned = one(DEFAULT_PLANNERS).unwrap();
+    assert_eq!(tuned.named, bi_am_rrt::Named::default());
+    assert_eq!(tuned.name, "Bi-AM-RRT*(D) tuned");
+    let paper = one("paper").unwrap();
+    assert_eq!(
+        paper.named,
+        bi_am_rrt::Named::from_name("Bi-AM-RRT*(D)").unwrap()
+    );
+    assert_eq!(paper.named.cfg, bi_am_rrt::Config::paper());
+    let all = parse_variants("all@e_max=3").unwrap();
+    assert_eq!(all.len(), 20);
+    assert!(
+        all.iter()
+            .all(|v| v.cfg.cfg.search.e_max == 3.0 && v.name.ends_with("@e_max=3"))
+    );
+    assert_eq!(parse_variants("tuned,paper,rt-rrt*").unwrap().len(), 3);
+    assert!(one("tuned,paper").is_err());
+    assert!(
+        parse_planners("tuned@e_max=3").is_err(),
+        "named planners take no overrides"
+    );
+    let err = parse_variants("bi-am-rrt").unwrap_err();
+    assert!(
+        format!("{err:#}").contains("`tuned`, `paper`, `all`"),
+        "{err:#}"
+    );
 }
 
 /// docs/configuration.md is the parameter table as `host-sim params` prints it (regenerate:

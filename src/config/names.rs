@@ -82,6 +82,17 @@ impl Named {
         }
     }
 
+    /// The paper's version: the same metric, Table 2's parameters and no tactics (the
+    /// configuration [`Config::new`] gives with its two switches).
+    pub const fn paper(self) -> Self {
+        Self {
+            metric: self.metric,
+            cfg: Config::new(self.cfg.base)
+                .with_bidirectional(self.cfg.bidirectional)
+                .with_new_rewiring(self.cfg.new_rewiring),
+        }
+    }
+
     /// Its name (a `Display` value).
     pub const fn name(&self) -> PlannerName {
         PlannerName(*self)

@@ -46,6 +46,10 @@ fn table1_names() {
     assert_eq!(tuned.cfg.tactics, Tactics::TUNED);
     assert_eq!(tuned.cfg.validate(), Ok(()));
     assert!(Named::from_name("AM-RRT*(D)-12").is_none());
+    // The paper's version of each tuned planner is the Table 1 planner.
+    for n in Named::table1() {
+        assert_eq!(n.tuned().paper(), n);
+    }
     // Some tactics: named one by one; a metric of the caller's own: (?).
     let mut some = Config::paper();
     some.tactics.connect = true;

@@ -26,9 +26,8 @@ pub struct Cmd {
     /// Legs to run, 1-based and comma-separated (default: all).
     #[arg(long, value_delimiter = ',')]
     legs: Option<Vec<usize>>,
-    /// Comma-separated planner names (Table 1 names, any case).
-    #[arg(long, default_value = "Bi-AM-RRT*(D)")]
-    planners: String,
+    #[command(flatten)]
+    planners: crate::args::PlannerArgs,
     /// Seeds per leg and planner (seeds 1..=N).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
     seeds: u64,
@@ -113,7 +112,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     for s in &mut scs {
         s.paper_lengths = paper_lengths;
     }
-    let variants = host_sim::sim::planners::parse_variants(&planners)?;
+    let variants = planners.variants()?;
     host_sim::study::bench::run(&host_sim::study::bench::BenchArgs {
         scenarios: scs,
         legs: legs.unwrap_or_default(),

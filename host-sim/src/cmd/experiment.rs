@@ -23,9 +23,8 @@ pub struct Cmd {
     /// Comma-separated scenario names (default: all in the file).
     #[arg(long, value_delimiter = ',')]
     maps: Option<Vec<String>>,
-    /// `all` or a comma-separated list of Table 1 names.
-    #[arg(long, default_value = "all")]
-    planners: String,
+    #[command(flatten)]
+    planners: crate::args::PlannerArgs,
     /// Runs per planner and scenario (seeds seed .. seed + repeats - 1).
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     repeats: u32,
@@ -155,7 +154,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
             experiment::Existing::Refuse
         },
         scenarios: scs,
-        planners: host_sim::sim::planners::parse_planners(&planners)?,
+        planners: planners.variants()?,
         repeats,
         clock,
         goals,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use host_sim::scenario;
 
@@ -20,9 +20,8 @@ pub struct Cmd {
     /// Scenario names in --scenarios (comma-separated; all by default).
     #[arg(long, value_delimiter = ',')]
     maps: Option<Vec<String>>,
-    /// Planner name (Table 1).
-    #[arg(long, default_value = "Bi-AM-RRT*(D)")]
-    planner: String,
+    #[command(flatten)]
+    planner: crate::args::PlannerArgs,
     /// Calls per configuration.
     #[arg(long, default_value_t = 10)]
     calls: u32,
@@ -42,9 +41,9 @@ pub fn main(cmd: Cmd) -> Result<()> {
         None => scenario::builtin_scenarios(),
     };
     let scs = body.apply_all(scs)?;
-    let base = host_sim::sim::planners::parse_planners(&planner)?
-        .first()
-        .copied()
-        .context("no planner")?;
+    let base = match planner.named()?.as_slice() {
+        [one] => *one,
+        many => anyhow::bail!("frozen runs one planner; {} named", many.len()),
+    };
     host_sim::study::bounds::print_frozen(scs, base, calls)
 }

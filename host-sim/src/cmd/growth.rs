@@ -20,9 +20,8 @@ pub struct Cmd {
     /// Comma-separated scenario names (default: all in the file).
     #[arg(long, value_delimiter = ',')]
     maps: Option<Vec<String>>,
-    /// Comma-separated Table 1 names.
-    #[arg(long, default_value = "Bi-AM-RRT*(D),Bi-AM-RRT*(E)")]
-    planners: String,
+    #[command(flatten)]
+    planners: crate::args::PlannerArgs,
     /// Seconds of planning per planner and mode.
     #[arg(long, default_value_t = 3.0)]
     seconds: f64,
@@ -50,12 +49,5 @@ pub fn main(cmd: Cmd) -> Result<()> {
         out,
     } = cmd;
     let scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
-    host_sim::study::growth::growth(
-        &scs,
-        &host_sim::sim::planners::parse_planners(&planners)?,
-        seconds,
-        call_ms,
-        seed,
-        &out,
-    )
+    host_sim::study::growth::growth(&scs, &planners.named()?, seconds, call_ms, seed, &out)
 }

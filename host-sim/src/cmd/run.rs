@@ -24,11 +24,8 @@ pub struct Cmd {
     /// Scenario name in --scenarios.
     #[arg(long)]
     scenario: Option<String>,
-    /// Planner name as in the paper's Table 1 (any case; suffix " tuned" for the tuned
-    /// configuration; `@field=value` overrides as in `bench --planners`). The default is
-    /// the tuned planner (`Config::default()`); "Bi-AM-RRT*(D)" is the paper's.
-    #[arg(long, default_value = "Bi-AM-RRT*(D) tuned")]
-    planner: String,
+    #[command(flatten)]
+    planner: crate::args::PlannerArgs,
     /// Run through every goal of the scenario instead of the first only.
     #[arg(long)]
     all_goals: bool,
@@ -90,7 +87,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     sc.paper_lengths = paper_lengths;
     run::run(&RunArgs {
         scenario: sc,
-        planner,
+        planner: planner.one()?,
         all_goals,
         seed,
         clock,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use host_sim::scenario;
 
@@ -22,10 +22,8 @@ pub struct Cmd {
     /// Scenario name in --scenarios.
     #[arg(long)]
     scenario: String,
-    /// Planner name (Table 1, optionally with the suffix " tuned" and the bench's
-    /// `@field=value` overrides).
-    #[arg(long, default_value = "Bi-AM-RRT*(D) tuned")]
-    planner: String,
+    #[command(flatten)]
+    planner: crate::args::PlannerArgs,
     /// Length in minutes of planner CPU time.
     #[arg(long, default_value_t = 30.0)]
     minutes: f64,
@@ -67,10 +65,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         bail!("--minutes, --goal-every and --speed must be positive");
     }
     let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, Some(&[scenario]))?)?;
-    let variant = host_sim::sim::planners::parse_variants(&planner)?
-        .into_iter()
-        .next()
-        .context("no planner")?;
+    let variant = planner.one()?;
     host_sim::study::soak::run(&host_sim::study::soak::SoakArgs {
         scenario: scs.remove(0),
         variant,

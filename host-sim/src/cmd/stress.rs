@@ -14,9 +14,8 @@ pub struct Cmd {
     /// Number of runs (cycling over maps, then planners; seeds consecutive).
     #[arg(long, default_value_t = 1000)]
     runs: u32,
-    /// Planner names (Table 1), comma-separated, or `all`.
-    #[arg(long, default_value = "Bi-AM-RRT*(E),Bi-AM-RRT*(D),AM-RRT*(E),RT-RRT*")]
-    planners: String,
+    #[command(flatten)]
+    planners: crate::args::PlannerArgs,
     /// First seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -44,7 +43,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     stress::run_and_report(
         &stress::StressArgs {
             runs,
-            planners: host_sim::sim::planners::parse_planners(&planners)?,
+            planners: planners.named()?,
             seed,
             t_exp: std::time::Duration::from_millis(t_exp_ms),
             max_calls,

@@ -1,5 +1,5 @@
-//! Planners as the commands name them: Table 1 names (any case, with or without ` tuned`),
-//! `all`, and the `@field=value` overrides; a run's configuration in three steps (the named
+//! Planners as the commands name them, one syntax for every command ([`parse_variants`]):
+//! `tuned` (the default), `paper`, `all`, Table 1 names, and the `@field=value` overrides; a run's configuration in three steps (the named
 //! planner, its lengths fitted to the map, the overrides as written: [`Variant::config_for`]).
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -7,30 +7,56 @@ use bi_am_rrt::{Config, Named};
 
 use crate::sim::Prepared;
 
-/// `all` or a comma-separated list of Table 1 names (any case, optionally ` tuned`).
-pub fn parse_planners(spec: &str) -> Result<Vec<Named>> {
-    if spec.trim().eq_ignore_ascii_case("all") {
+/// The default of every command's `--planners`: the tuned Bi-AM-RRT*(D).
+pub const DEFAULT_PLANNERS: &str = "tuned";
+
+/// One planner word: `tuned` (the tuned Bi-AM-RRT*(D), `Config::default()`), `paper` (the
+/// paper's Bi-AM-RRT*(D), `Config::paper()`), `all` (Table 1's 20, the paper's) or a Table 1
+/// name (any case, optionally with the suffix ` tuned`).
+fn named(word: &str) -> Result<Vec<Named>> {
+    let word = word.trim();
+    if word.eq_ignore_ascii_case("all") {
         return Ok(Named::table1().to_vec());
     }
-    spec.split(',')
-        .map(|name| {
-            let name = name.trim();
-            // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
-            let found = Named::table1()
-                .into_iter()
-                .chain(Named::table1().map(Named::tuned))
-                .find(|c| c.name().to_string().eq_ignore_ascii_case(name));
-            found.with_context(|| {
-                let all: Vec<String> = Named::table1()
-                    .iter()
-                    .map(|c| c.name().to_string())
-                    .collect();
-                format!(
-                    "unknown planner {name:?}; Table 1 names are {} (each also with the \
-                     suffix \" tuned\")",
-                    all.join(", ")
+    if word.eq_ignore_ascii_case("tuned") {
+        return Ok(vec![Named::default()]);
+    }
+    if word.eq_ignore_ascii_case("paper") {
+        return Ok(vec![Named::default().paper()]);
+    }
+    // Any case: `bi-am-rrt*(d)` is `Bi-AM-RRT*(D)`.
+    let found = Named::table1()
+        .into_iter()
+        .chain(Named::table1().map(Named::tuned))
+        .find(|c| c.name().to_string().eq_ignore_ascii_case(word));
+    let found = found.with_context(|| {
+        let all: Vec<String> = Named::table1()
+            .iter()
+            .map(|c| c.name().to_string())
+            .collect();
+        format!(
+            "unknown planner {word:?}: `tuned`, `paper`, `all` or a Table 1 name ({}, each \
+             also with the suffix \" tuned\")",
+            all.join(", ")
+        )
+    })?;
+    Ok(vec![found])
+}
+
+/// Planners without overrides ([`parse_variants`] with none allowed), for the studies that
+/// take named planners only.
+pub fn parse_planners(spec: &str) -> Result<Vec<Named>> {
+    parse_variants(spec)?
+        .into_iter()
+        .map(|v| {
+            if v.overrides.is_empty() {
+                Ok(v.named)
+            } else {
+                bail!(
+                    "{}: this command takes planner names without @overrides",
+                    v.name
                 )
-            })
+            }
         })
         .collect()
 }
@@ -103,42 +129,45 @@ impl Variant {
     }
 }
 
-/// Comma-separated planner names: Table 1 names in any case, with or without the suffix
-/// `" tuned"`, each optionally followed by overrides `@field=value` (any value of the
-/// parameter table, [`apply`]), e.g. `Bi-AM-RRT*(D) tuned@e_max=8`: what-if variants in one
-/// run.
+/// The one syntax of every command's planners: comma-separated items, each a planner word
+/// (`tuned`, the default; `paper`; `all`, Table 1's 20; or a Table 1 name in any case, with
+/// or without the suffix ` tuned`) optionally followed by overrides `@field=value` (any
+/// value of the parameter table, [`apply`]; on `all`, on each of the 20), e.g.
+/// `tuned@e_max=8,paper`: what-if variants in one run.
 pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
-    spec.split(',')
-        .map(|item| {
-            let mut parts = item.trim().split('@');
-            let name = parts.next().unwrap_or_default();
-            let named = parse_planners(name)?
-                .into_iter()
-                .next()
-                .ok_or_else(|| anyhow!("empty planner name"))?;
+    let mut out = Vec::new();
+    for item in spec.split(',') {
+        let mut parts = item.trim().split('@');
+        let word = parts.next().unwrap_or_default();
+        if word.trim().is_empty() {
+            bail!("empty planner name in {spec:?}");
+        }
+        let mut overrides = Vec::new();
+        for o in parts {
+            let (k, v) = o
+                .split_once('=')
+                .ok_or_else(|| anyhow!("override {o:?}: write field=value"))?;
+            overrides.push((k.trim().to_string(), v.trim().to_string()));
+        }
+        let label = item.trim().split_once('@').map(|x| x.1);
+        for named in named(word)? {
             let mut cfg = named;
-            let mut overrides = Vec::new();
-            for o in parts {
-                let (k, v) = o
-                    .split_once('=')
-                    .ok_or_else(|| anyhow!("override {o:?}: write field=value"))?;
-                apply(&mut cfg.cfg, k.trim(), v.trim())
-                    .with_context(|| format!("override {o:?}"))?;
-                overrides.push((k.trim().to_string(), v.trim().to_string()));
+            for (k, v) in &overrides {
+                apply(&mut cfg.cfg, k, v).with_context(|| format!("override {k}={v}"))?;
             }
             cfg.cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
-            let label = item.trim().split_once('@').map(|x| x.1);
-            Ok(Variant {
+            out.push(Variant {
                 name: match label {
                     Some(l) => format!("{}@{l}", cfg.name()),
                     None => cfg.name().to_string(),
                 },
                 cfg,
                 named,
-                overrides,
-            })
-        })
-        .collect()
+                overrides: overrides.clone(),
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// One `field=value` override: any value of the core's parameter table
@@ -216,4 +245,13 @@ pub fn reference() -> String {
         );
     }
     out
+}
+
+/// The one planner `spec` names ([`parse_variants`]); an error when it names none or several.
+pub fn one(spec: &str) -> Result<Variant> {
+    let mut all = parse_variants(spec)?;
+    match all.len() {
+        1 => Ok(all.remove(0)),
+        n => bail!("one planner wanted; {spec:?} names {n}"),
+    }
 }

@@ -10,7 +10,7 @@
 //!   moving for that long, and the cost of its path to the goal is recorded (the paper does
 //!   not report this).
 
-use crate::sim::planners::as_printed_names;
+use crate::sim::planners::{Variant, as_printed_names};
 use crate::sim::{paper_pace, row};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
@@ -18,9 +18,9 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
+use bi_am_rrt::RewireMode;
 use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::clock::Clock as _;
-use bi_am_rrt::{Named, RewireMode};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
@@ -48,7 +48,7 @@ pub struct ExperimentArgs {
     /// Scenarios to run.
     pub scenarios: Vec<Scenario>,
     /// Planner configurations (Table 1 names).
-    pub planners: Vec<Named>,
+    pub planners: Vec<Variant>,
     /// Runs per planner and scenario.
     pub repeats: u32,
     /// Clock.
@@ -90,12 +90,14 @@ pub struct ExperimentArgs {
 }
 
 /// The planners as the runs use them (the switches applied).
-fn planners_of(args: &ExperimentArgs) -> Vec<Named> {
+fn planners_of(args: &ExperimentArgs) -> Vec<Variant> {
     args.planners
         .iter()
-        .map(|n| {
-            let mut n = *n;
-            let c = &mut n.cfg;
+        .map(|v| {
+            let mut v = v.clone();
+            // On the named configuration, before its lengths are fitted and its overrides
+            // applied (an override of the same value wins).
+            let c = &mut v.named.cfg;
             if args.faithful {
                 c.rewiring.mode = RewireMode::Faithful;
             }
@@ -107,7 +109,7 @@ fn planners_of(args: &ExperimentArgs) -> Vec<Named> {
             if args.pace == crate::results::Pace::Paper {
                 paper_pace(c);
             }
-            n
+            v
         })
         .collect()
 }
@@ -117,7 +119,7 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
     let t = &args.table;
     Settings {
         scenarios: args.scenarios.iter().map(ScenarioId::of).collect(),
-        planners: args.planners.iter().map(|c| c.name().to_string()).collect(),
+        planners: args.planners.iter().map(|v| v.name.clone()).collect(),
         repeats: args.repeats,
         seed: args.seed,
         clock: args.clock,
@@ -137,13 +139,24 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
         ),
         configs: planners_of(args)
             .iter()
-            .map(|n| crate::results::config_record(&n.cfg))
+            .map(|v| {
+                let mut n = v.named;
+                for (k, x) in &v.overrides {
+                    let _ = crate::sim::planners::apply(&mut n.cfg, k, x);
+                }
+                crate::results::config_record(&n.cfg)
+            })
             .collect(),
     }
 }
 
 /// Runs one planner on one scenario with one seed and returns its rows.
-pub fn one_run(prep: &Prepared, cfg: Named, seed: u64, args: &ExperimentArgs) -> Result<Vec<Row>> {
+pub fn one_run(
+    prep: &Prepared,
+    planner: &Variant,
+    seed: u64,
+    args: &ExperimentArgs,
+) -> Result<Vec<Row>> {
     let wall = Instant::now();
     let goals: Vec<usize> = match args.goals {
         Goals::First => vec![0],
@@ -163,7 +176,9 @@ pub fn one_run(prep: &Prepared, cfg: Named, seed: u64, args: &ExperimentArgs) ->
             d.on_call(p, agent, leg_start, now_s);
         }
     };
-    let fitted = prep.fit(cfg);
+    // Named -> fitted to the map -> the overrides.
+    let fitted = planner.config_for(prep)?;
+    let cfg = fitted;
     let (runs, final_nodes) = with_planner(prep, fitted, seed, |p| {
         let runs = match args.clock {
             ClockKind::Wall => {
@@ -215,6 +230,7 @@ pub fn one_run(prep: &Prepared, cfg: Named, seed: u64, args: &ExperimentArgs) ->
         .map(|g| {
             let any = if g.goal_index == 0 { anytime } else { None };
             let mut r = row(prep, cfg, seed, g, args.clock, final_nodes, any, run_wall_s);
+            r.planner = planner.name.clone();
             if let Some(d) = disc.as_ref().filter(|_| g.goal_index == first) {
                 d.finish(&mut r, prep, prep.scenario.goals[first]);
             }
@@ -259,12 +275,12 @@ fn complete_runs(rows: &[Row], scenarios: &[Scenario], goals: Goals) -> BTreeSet
 /// Bakes what the planners need and times each map's processing.
 fn prepare(
     preps: &[Prepared],
-    planners: &[Named],
+    planners: &[Variant],
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<MapTimes>> {
     let needs_d = planners
         .iter()
-        .any(|c| c.metric == bi_am_rrt::MetricKind::Diffusion);
+        .any(|v| v.named.metric == bi_am_rrt::MetricKind::Diffusion);
     pool.install(|| {
         preps
             .par_iter()
@@ -396,7 +412,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     // Legs through long narrow corridors, said before the runs (issue 42).
     for prep in &preps {
         for cfg in &planners {
-            prep.warn_narrow_legs(prep.fit(*cfg), &|k| {
+            prep.warn_narrow_legs(cfg.config_for(prep)?, &|k| {
                 Some(format!(
                     "within the leg's {} calls",
                     prep.leg_calls(k, &Default::default())
@@ -426,7 +442,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
         crate::results::write_rows(out, &rows)?;
     }
     let wanted = manifest.runs();
-    let todo: Vec<(usize, Named, u64)> = wanted
+    let todo: Vec<(usize, &Variant, u64)> = wanted
         .iter()
         .filter(|k| !done.contains(k))
         .map(|k| {
@@ -436,8 +452,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
                 .context("scenario")?;
             let cfg = planners
                 .iter()
-                .find(|c| c.name().to_string() == k.planner)
-                .copied()
+                .find(|v| v.name == k.planner)
                 .context("planner")?;
             Ok((si, cfg, k.seed))
         })
@@ -464,7 +479,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     let result: Result<()> = pool.install(|| {
         todo.par_iter().try_for_each(|&(si, cfg, seed)| {
             let r = one_run(&preps[si], cfg, seed, args).with_context(|| {
-                format!("{} on {} seed {seed}", cfg.name(), preps[si].scenario.name)
+                format!("{} on {} seed {seed}", cfg.name, preps[si].scenario.name)
             })?;
             sink.lock().map_err(|_| anyhow!("poisoned"))?.append(&r)?;
             // Off a terminal the bar draws nothing: a plain line per run instead.
@@ -474,7 +489,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
                     "run {}/{}: {} on {} seed {seed}: {reached}/{} goals reached ({:.1} s)",
                     bar.position() + 1,
                     bar.length().unwrap_or(0),
-                    cfg.name(),
+                    cfg.name,
                     preps[si].scenario.name,
                     r.len(),
                     bar.elapsed().as_secs_f64()

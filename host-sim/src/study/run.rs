@@ -7,7 +7,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use bi_am_rrt::Point;
 use bi_am_rrt::agent::Protocol;
 use bi_am_rrt::clock::Clock as _;
@@ -26,8 +26,8 @@ use crate::sim::{GoalRun, Prepared, SimPlanner, drive_each, with_planner};
 pub struct RunArgs {
     /// The scenario.
     pub scenario: Scenario,
-    /// Table 1 name.
-    pub planner: String,
+    /// The planner (a Table 1 name with its overrides).
+    pub planner: crate::sim::planners::Variant,
     /// All goals or the first.
     pub all_goals: bool,
     /// Seed.
@@ -137,11 +137,7 @@ fn write_result(
 
 /// Runs `run`.
 pub fn run(args: &RunArgs) -> Result<()> {
-    // A Table 1 name, optionally with the bench's `@field=value` overrides.
-    let variant = crate::sim::planners::parse_variants(&args.planner)?
-        .into_iter()
-        .next()
-        .context("no planner named")?;
+    let variant = &args.planner;
     if let Some(r) = args.obstacle {
         let size = args.scenario.map.grid();
         let most = 0.25 * size.width_m().min(size.height_m());
@@ -413,7 +409,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     }
     println!(
         "{} on {} ({}), seed {}, {:?} clock",
-        args.planner, prep.scenario.name, prep.scenario.source, args.seed, args.clock
+        args.planner.name, prep.scenario.name, prep.scenario.source, args.seed, args.clock
     );
     let used = cfg;
     println!(
