@@ -22,7 +22,7 @@
 //!
 //! ```sh
 //! cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
-//!     --scenario office --out target/flash
+//!     --maps office --out target/flash
 //! BIAMRRT_FLASH_DIR=$PWD/target/flash cargo run --release --example firmware \
 //!     --target thumbv7em-none-eabihf --features firmware-example
 //! ```

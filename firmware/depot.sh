@@ -16,7 +16,7 @@ check=0
 if [ "${1:-}" = --check ]; then check=1; fi
 LLVM_SIZE=$(find "$(rustc --print sysroot)" -name llvm-size -type f | head -n 1)
 cargo run --release -p host-sim -- export --scenarios ../shared/maps/real/scenarios.toml \
-  --scenario depot --out target/flash-depot >/dev/null
+  --maps depot --out target/flash-depot >/dev/null
 export BIAMRRT_FLASH_DIR="$PWD/target/flash-depot" BIAMRRT_GOALS=all
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf --features firmware-example)
 elf=target/thumbv7em-none-eabihf/firmware/examples/firmware

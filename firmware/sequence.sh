@@ -33,7 +33,7 @@ while [ $# -gt 0 ]; do
   shift
 done
 cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
-  --scenario office --out target/flash ${radius:+--robot-radius "$radius"} >/dev/null
+  --maps office --out target/flash ${radius:+--robot-radius "$radius"} >/dev/null
 export BIAMRRT_FLASH_DIR="$PWD/target/flash" BIAMRRT_GOALS=all
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf)
 cargo=(cargo)

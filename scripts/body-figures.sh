@@ -67,7 +67,7 @@ for r in 0 0.2 0.3; do
   for spec in "${maps[@]}"; do
     read -r file name <<<"$spec"
     log="$tmp/run-$name-$r.log"
-    if "$bin" run --scenarios "$file" --scenario "$name" --all-goals --clock virtual \
+    if "$bin" run --scenarios "$file" --maps "$name" --all-goals --clock virtual \
       --t-exp-ms 5 --seed 1 --robot-radius "$r" --snap-to-room --out "$tmp/run-$name-$r" \
       >"$log" 2>&1; then
       grep -E "^scenario .* moved" "$log" | sed "s/^/- r = $r: /" >>"$tmp/moves.txt" || true

@@ -3,7 +3,7 @@
 and a scenario file (nothing is committed):
 
     scripts/gen-maps.py OUT_DIR [--big]
-    target/release/host-sim optimum --scenarios OUT_DIR/scenarios.toml --scenario maze129
+    target/release/host-sim optimum --scenarios OUT_DIR/scenarios.toml --maps maze129
 
 (--big takes about two minutes: the mazes are carved in plain Python.)
 

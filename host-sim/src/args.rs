@@ -153,21 +153,6 @@ pub(crate) fn load_map(spec: &str, resolution: Option<f32>) -> Result<scenario::
     Ok(grid)
 }
 
-/// The one scenario of a command that runs one: `--scenarios FILE --scenario NAME`, or the
-/// built-in `--builtin NAME` when neither is given.
-pub(crate) fn one_scenario(
-    builtin: &str,
-    scenarios: Option<PathBuf>,
-    scenario: Option<String>,
-) -> Result<scenario::Scenario> {
-    Ok(match (scenarios, scenario) {
-        (Some(file), Some(name)) => scenario::load_scenarios(&file, Some(&[name]))?.remove(0),
-        (Some(_), None) => bail!("--scenarios needs --scenario NAME"),
-        (None, Some(_)) => bail!("--scenario needs --scenarios FILE"),
-        (None, None) => scenario::builtin_by_name(builtin)?,
-    })
-}
-
 /// The planners a command runs: one flag, one syntax and one default for every command
 /// (`host_sim::sim::planners::parse_variants`).
 #[derive(Args, Clone, Debug)]
@@ -205,7 +190,11 @@ impl PlannerArgs {
 
 /// Old spellings of options that still work for one release, each with the new one: a
 /// warning is printed when a command line uses one (`main`).
-pub(crate) const RENAMED: [(&str, &str); 1] = [("--planner", "--planners")];
+pub(crate) const RENAMED: [(&str, &str); 3] = [
+    ("--planner", "--planners"),
+    ("--scenario", "--maps"),
+    ("--builtin", "--maps"),
+];
 
 /// Warns about each old spelling in `args` ([`RENAMED`]).
 pub(crate) fn warn_renamed(args: &[String]) {
@@ -216,5 +205,76 @@ pub(crate) fn warn_renamed(args: &[String]) {
         {
             eprintln!("warning: {old} is now {new} ({old} goes in the next release)");
         }
+    }
+}
+
+/// The scenarios a command runs: one group, one syntax for every command. A scenario file
+/// (or the built-ins), the names to take from it, and the robot's body.
+#[derive(Args, Clone, Debug)]
+pub(crate) struct ScenarioArgs {
+    /// Scenario file (TOML in the form of shared/maps/scenarios.toml; map paths relative to
+    /// it), or `builtin` for the built-in scenarios (open, bug_trap, maze and the paper-sized
+    /// trap_100, maze_100, office_200), the default.
+    #[arg(long, value_name = "FILE")]
+    scenarios: Option<PathBuf>,
+    /// Scenario names in --scenarios, comma-separated (default: every one; a command that
+    /// runs one scenario: its own default among the built-ins). `--scenario` and `--builtin`
+    /// are the old spellings.
+    #[arg(
+        long,
+        value_name = "NAMES",
+        value_delimiter = ',',
+        alias = "scenario",
+        alias = "builtin"
+    )]
+    maps: Option<Vec<String>>,
+    #[command(flatten)]
+    body: BodyArgs,
+}
+
+impl ScenarioArgs {
+    fn file(&self) -> PathBuf {
+        self.scenarios
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(scenario::BUILTIN_SET))
+    }
+
+    /// Every scenario named (all of the file's without names), for the robot's body.
+    pub(crate) fn all(&self) -> Result<Vec<scenario::Scenario>> {
+        self.body.apply_all(scenario::load_scenarios(
+            &self.file(),
+            self.maps.as_deref(),
+        )?)
+    }
+
+    /// [`ScenarioArgs::all`], or `fallback`'s scenarios when neither a file nor names are
+    /// given.
+    pub(crate) fn all_or(
+        &self,
+        fallback: impl FnOnce() -> Vec<scenario::Scenario>,
+    ) -> Result<Vec<scenario::Scenario>> {
+        if self.scenarios.is_none() && self.maps.is_none() {
+            self.body.apply_all(fallback())
+        } else {
+            self.all()
+        }
+    }
+
+    /// The one scenario of a command that runs one: the one named, or the built-in
+    /// `default` when no file and no name are given.
+    pub(crate) fn one(&self, default: Option<&str>) -> Result<scenario::Scenario> {
+        let names = match (&self.maps, &self.scenarios, default) {
+            (Some(names), _, _) => names.clone(),
+            (None, None, Some(d)) => vec![d.to_string()],
+            _ => bail!("name the scenario to run with --maps NAME"),
+        };
+        if names.len() != 1 {
+            bail!(
+                "this command runs one scenario; --maps names {}",
+                names.len()
+            );
+        }
+        let sc = scenario::load_scenarios(&self.file(), Some(&names))?.remove(0);
+        self.body.apply(sc)
     }
 }

@@ -1547,3 +1547,36 @@ fn door_scenes_run_and_report() {
     assert!(text.contains("| closed-door | rebaked | 1 | 1 |"), "{text}");
     assert!(dir.path().join("report/moving.svg").exists());
 }
+
+/// The command line's shared groups (issue 43): one scenario syntax (`--scenarios FILE`,
+/// `--maps NAMES`) and one planner syntax everywhere; the old spellings (`--scenario`,
+/// `--builtin`, `--planner`) still work for a release, with a warning.
+#[test]
+fn shared_option_groups_and_old_spellings() {
+    let bin = env!("CARGO_BIN_EXE_host-sim");
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(bin).args(args).output().unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (ok, new, err) = run(&["optimum", "--maps", "open"]);
+    assert!(ok, "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    let (ok, old, err) = run(&["optimum", "--scenarios", "builtin", "--scenario", "open"]);
+    assert!(ok, "{err}");
+    assert!(err.contains("--scenario is now --maps"), "{err}");
+    let strip = |s: &str| {
+        s.lines()
+            .filter(|l| !l.contains("CPU"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(strip(&new), strip(&old), "the same scenario either way");
+    let (ok, _, err) = run(&["optimum", "--maps", "open,maze"]);
+    assert!(!ok && err.contains("one scenario"), "{err}");
+    let (ok, _, err) = run(&["frozen", "--planners", "tuned,paper"]);
+    assert!(!ok && err.contains("one planner"), "{err}");
+}

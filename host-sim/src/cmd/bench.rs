@@ -6,23 +6,14 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use host_sim::scenario;
 
 use crate::args::*;
 
 /// The options of `host-sim bench` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
-    /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
-    /// office_200).
-    #[arg(long)]
-    scenarios: PathBuf,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Comma-separated scenario names (default: all in the file).
-    #[arg(long, value_delimiter = ',')]
-    maps: Option<Vec<String>>,
+    scenarios: crate::args::ScenarioArgs,
     /// Legs to run, 1-based and comma-separated (default: all).
     #[arg(long, value_delimiter = ',')]
     legs: Option<Vec<usize>>,
@@ -83,8 +74,6 @@ pub struct Cmd {
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
         scenarios,
-        body,
-        maps: names,
         legs,
         planners,
         seeds,
@@ -104,7 +93,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         bail!("--budgets: every budget must be a positive number of seconds");
     }
     budgets.sort_by(f64::total_cmp);
-    let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
+    let mut scs = scenarios.all()?;
     no_clearance(
         &scs,
         "bench compares path costs with OMPL's, which are lengths",

@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::scenario;
 use host_sim::sim::clock::ClockKind;
 use host_sim::study::experiment::{self, ExperimentArgs, Goals};
 
@@ -13,16 +12,8 @@ use crate::args::*;
 /// The options of `host-sim experiment` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
-    /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
-    /// office_200).
-    #[arg(long)]
-    scenarios: PathBuf,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Comma-separated scenario names (default: all in the file).
-    #[arg(long, value_delimiter = ',')]
-    maps: Option<Vec<String>>,
+    scenarios: crate::args::ScenarioArgs,
     #[command(flatten)]
     planners: crate::args::PlannerArgs,
     /// Runs per planner and scenario (seeds seed .. seed + repeats - 1).
@@ -109,8 +100,6 @@ pub struct Cmd {
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
         scenarios,
-        body,
-        maps: names,
         planners,
         repeats,
         clock,
@@ -134,7 +123,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         meet_all_pairs,
         obstacle,
     } = cmd;
-    let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
+    let mut scs = scenarios.all()?;
     for s in &mut scs {
         s.paper_lengths = paper_lengths;
     }

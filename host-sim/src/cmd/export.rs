@@ -6,21 +6,14 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use host_sim::metric::bake;
-use host_sim::scenario;
 
 use crate::args::*;
 
 /// The options of `host-sim export` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// Scenario file (TOML), or `builtin`.
-    #[arg(long)]
-    scenarios: PathBuf,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Scenario to export.
-    #[arg(long)]
-    scenario: String,
+    scenarios: crate::args::ScenarioArgs,
     /// Output folder (created): NAME.grid, NAME.table, NAME.rs, and scenario.rs (the same
     /// source, which the firmware example includes).
     #[arg(long)]
@@ -38,13 +31,11 @@ pub struct Cmd {
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
         scenarios,
-        body,
-        scenario,
         out,
         table,
         flash_data,
     } = cmd;
-    let sc = body.apply(scenario::load_scenarios(&scenarios, Some(&[scenario]))?.remove(0))?;
+    let sc = scenarios.one(None)?;
     no_clearance(
         std::slice::from_ref(&sc),
         "export does not write a clearance field yet (build one at start-up with bi_am_rrt::clearance::clearance_field)",

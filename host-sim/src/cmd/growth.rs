@@ -5,21 +5,12 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use host_sim::scenario;
-
-use crate::args::*;
 
 /// The options of `host-sim growth` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// Scenario file (TOML), or `builtin`.
-    #[arg(long)]
-    scenarios: PathBuf,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Comma-separated scenario names (default: all in the file).
-    #[arg(long, value_delimiter = ',')]
-    maps: Option<Vec<String>>,
+    scenarios: crate::args::ScenarioArgs,
     #[command(flatten)]
     planners: crate::args::PlannerArgs,
     /// Seconds of planning per planner and mode.
@@ -40,14 +31,12 @@ pub struct Cmd {
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
         scenarios,
-        body,
-        maps: names,
         planners,
         seconds,
         call_ms,
         seed,
         out,
     } = cmd;
-    let scs = body.apply_all(scenario::load_scenarios(&scenarios, names.as_deref())?)?;
+    let scs = scenarios.all()?;
     host_sim::study::growth::growth(&scs, &planners.named()?, seconds, call_ms, seed, &out)
 }

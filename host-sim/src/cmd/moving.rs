@@ -8,22 +8,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use crate::args::*;
-
 /// The options of `host-sim moving` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// A built-in scenario (default office_200) ...
-    #[arg(long, default_value = "office_200")]
-    builtin: String,
-    /// ... or a scenario from a file (with --scenario NAME).
-    #[arg(long)]
-    scenarios: Option<PathBuf>,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Scenario name in --scenarios.
-    #[arg(long)]
-    scenario: Option<String>,
+    scenarios: crate::args::ScenarioArgs,
     /// Scenes: crossing, head-on, door, closed-door (comma-separated).
     #[arg(
         long,
@@ -50,18 +39,14 @@ pub struct Cmd {
 /// Runs the command.
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
-        builtin,
         scenarios,
-        body,
-        scenario,
         kinds,
         seeds,
         t_exp_ms,
         out,
         animate,
     } = cmd;
-    let sc = one_scenario(&builtin, scenarios, scenario)?;
-    let prep = host_sim::sim::Prepared::new(body.apply(sc)?);
+    let prep = host_sim::sim::Prepared::new(scenarios.one(Some("office_200"))?);
     host_sim::study::moving::moving(
         &prep,
         &host_sim::study::moving::MovingArgs {

@@ -7,23 +7,11 @@ use clap::Args;
 use host_sim::sim::clock::ClockKind;
 use host_sim::study::run::{self, RunArgs};
 
-use crate::args::*;
-
 /// The options of `host-sim run` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// A built-in scenario: open, bug_trap, maze (small fixtures) or trap_100, maze_100,
-    /// office_200 (the paper's sizes) ...
-    #[arg(long, default_value = "bug_trap")]
-    builtin: String,
-    /// ... or a scenario from a file (with --scenario NAME).
-    #[arg(long)]
-    scenarios: Option<PathBuf>,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Scenario name in --scenarios.
-    #[arg(long)]
-    scenario: Option<String>,
+    scenarios: crate::args::ScenarioArgs,
     #[command(flatten)]
     planner: crate::args::PlannerArgs,
     /// Run through every goal of the scenario instead of the first only.
@@ -66,10 +54,7 @@ pub struct Cmd {
 /// Runs the command.
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
-        builtin,
         scenarios,
-        body,
-        scenario,
         planner,
         all_goals,
         seed,
@@ -82,8 +67,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         pace,
         no_optimum,
     } = cmd;
-    let sc = one_scenario(&builtin, scenarios, scenario)?;
-    let mut sc = body.apply(sc)?;
+    let mut sc = scenarios.one(Some("bug_trap"))?;
     sc.paper_lengths = paper_lengths;
     run::run(&RunArgs {
         scenario: sc,

@@ -5,23 +5,14 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use host_sim::scenario;
 
 use crate::args::*;
 
 /// The options of `host-sim soak` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// Scenario file (TOML in the form of shared/maps/scenarios.toml), or `builtin` for the
-    /// built-in scenarios (open, bug_trap, maze and the paper-sized trap_100, maze_100,
-    /// office_200).
-    #[arg(long)]
-    scenarios: PathBuf,
     #[command(flatten)]
-    body: BodyArgs,
-    /// Scenario name in --scenarios.
-    #[arg(long)]
-    scenario: String,
+    scenarios: crate::args::ScenarioArgs,
     #[command(flatten)]
     planner: crate::args::PlannerArgs,
     /// Length in minutes of planner CPU time.
@@ -50,8 +41,6 @@ pub struct Cmd {
 pub fn main(cmd: Cmd) -> Result<()> {
     let Cmd {
         scenarios,
-        body,
-        scenario,
         planner,
         minutes,
         goal_every,
@@ -64,7 +53,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     if !(minutes > 0.0 && goal_every > 0.0 && speed > 0.0) {
         bail!("--minutes, --goal-every and --speed must be positive");
     }
-    let mut scs = body.apply_all(scenario::load_scenarios(&scenarios, Some(&[scenario]))?)?;
+    let mut scs = vec![scenarios.one(None)?];
     let variant = planner.one()?;
     host_sim::study::soak::run(&host_sim::study::soak::SoakArgs {
         scenario: scs.remove(0),
