@@ -995,7 +995,7 @@ fn bench_runs_on_the_steady_clock() {
         out: dir.path().to_path_buf(),
         table: TableOptions::default(),
         ompl: None,
-        clock: host_sim::study::bench::BenchClock::Steady,
+        clock: host_sim::study::bench::BenchClock::Wall,
         cold: false,
         until_first: true,
         grid: false,
@@ -1579,4 +1579,22 @@ fn shared_option_groups_and_old_spellings() {
     assert!(!ok && err.contains("one scenario"), "{err}");
     let (ok, _, err) = run(&["frozen", "--planners", "tuned,paper"]);
     assert!(!ok && err.contains("one planner"), "{err}");
+    // One clock syntax: `run` takes the thread's CPU time as `bench` does.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let (ok, text, err) = run(&[
+        "run",
+        "--maps",
+        "open",
+        "--clock",
+        "cpu",
+        "--t-exp-ms",
+        "2",
+        "--no-optimum",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(text.contains("Cpu clock"), "{text}");
+    assert!(out.join("result.json").exists());
 }

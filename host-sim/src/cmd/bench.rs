@@ -37,9 +37,10 @@ pub struct Cmd {
     /// `benches/ompl` harness binary (see its README; needs libompl-dev).
     #[arg(long)]
     ompl: Option<PathBuf>,
-    /// The planners' clock: thread CPU time, the monotonic clock (cheaper to read; at least
-    /// the CPU time), or the virtual clock (work units, repeatable: for comparing
-    /// algorithmic changes; its "us" are virtual).
+    /// The planners' clock, as every command names it: `cpu` (thread CPU time), `wall` (the
+    /// monotonic clock: cheaper to read, at least the CPU time; `steady` is the old
+    /// spelling) or `virtual` (work units, repeatable: for comparing algorithmic changes; its
+    /// "us" are virtual).
     #[arg(long, value_enum, default_value = "cpu")]
     clock: host_sim::study::bench::BenchClock,
     /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of

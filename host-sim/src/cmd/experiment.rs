@@ -19,7 +19,8 @@ pub struct Cmd {
     /// Runs per planner and scenario (seeds seed .. seed + repeats - 1).
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     repeats: u32,
-    /// Clock: `wall` (real time, as the paper) or `virtual` (work-driven, repeatable).
+    /// Clock, as every command names it: `wall` (real time, as the paper), `cpu` (the
+    /// thread's CPU time) or `virtual` (work-driven, repeatable).
     #[arg(long, value_enum, default_value = "wall")]
     clock: ClockKind,
     /// Goal 1 only, or the whole goal sequence.

@@ -20,7 +20,8 @@ pub struct Cmd {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Clock: `wall` (real time, as the paper) or `virtual` (work-driven, repeatable).
+    /// Clock, as every command names it: `wall` (real time, as the paper), `cpu` (the
+    /// thread's CPU time) or `virtual` (work-driven, repeatable).
     #[arg(long, value_enum, default_value = "wall")]
     clock: ClockKind,
     /// Drop a disc of this radius on the planned path once the agent moves (paper Fig. 7).

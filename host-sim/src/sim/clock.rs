@@ -66,10 +66,14 @@ pub fn virtual_clock(ns_per_unit: u64) -> FakeClock {
 )]
 #[serde(rename_all = "lowercase")]
 pub enum ClockKind {
-    /// Work-driven, repeatable.
+    /// Work-driven, repeatable (work units at a fixed rate).
     Virtual,
-    /// Real time.
+    /// Real time: the monotonic clock (`steady` is the old spelling of `bench`).
+    #[value(alias = "steady")]
     Wall,
+    /// The thread's CPU time: real time without the time the thread spends descheduled on
+    /// a busy machine.
+    Cpu,
 }
 
 /// The CPU time of the calling thread, in nanoseconds (what benchmarks time with: it does not

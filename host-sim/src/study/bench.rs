@@ -86,20 +86,10 @@ pub fn flush_caches() {
     std::hint::black_box(sum);
 }
 
-/// The clock of a bench ([`BenchArgs::clock`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum BenchClock {
-    /// Thread CPU time.
-    #[default]
-    Cpu,
-    /// The monotonic clock: a vDSO read of about 20 ns where thread CPU time is a system
-    /// call of about 0.4 us, and the clock OMPL's timed termination condition reads in its
-    /// loop. Time the thread spends descheduled counts, so a run measures at least its CPU
-    /// time.
-    Steady,
-    /// Work-driven, repeatable.
-    Virtual,
-}
+/// A bench run's clock: [`ClockKind`] (`cpu`, the default; `wall`, the monotonic clock, a
+/// vDSO read of about 20 ns where thread CPU time is a system call of about 0.4 us, and the
+/// clock OMPL's timed termination condition reads in its loop; `virtual`).
+pub type BenchClock = crate::sim::clock::ClockKind;
 
 /// A bench run's clock, counting its readings.
 enum RunClock {
@@ -112,7 +102,7 @@ impl RunClock {
     fn new(kind: BenchClock) -> Self {
         match kind {
             BenchClock::Cpu => Self::Cpu(CpuClock::new()),
-            BenchClock::Steady => Self::Steady(std::time::Instant::now(), std::cell::Cell::new(0)),
+            BenchClock::Wall => Self::Steady(std::time::Instant::now(), std::cell::Cell::new(0)),
             BenchClock::Virtual => {
                 Self::Virtual(virtual_clock(VIRTUAL_NS_PER_UNIT), std::cell::Cell::new(0))
             }

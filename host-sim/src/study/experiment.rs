@@ -188,6 +188,13 @@ pub fn one_run(
                     track(p, gi, a, clock.now() as f64 / hz)
                 })?
             }
+            ClockKind::Cpu => {
+                let clock = crate::sim::clock::CpuClock::new();
+                let hz = clock.ticks_per_second() as f64;
+                drive(p, prep, &clock, &goals, &protocol, |p, gi, a, _| {
+                    track(p, gi, a, clock.now() as f64 / hz)
+                })?
+            }
             ClockKind::Virtual => {
                 let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
                 let hz = clock.ticks_per_second() as f64;
@@ -216,6 +223,7 @@ pub fn one_run(
                 .map_err(|e| anyhow!("{e}"))?;
             let progress = match args.clock {
                 ClockKind::Wall => p.grow(&WallClock::new()),
+                ClockKind::Cpu => p.grow(&crate::sim::clock::CpuClock::new()),
                 ClockKind::Virtual => p.grow(&virtual_clock(VIRTUAL_NS_PER_UNIT)),
             };
             Ok(progress.goal_cost.filter(|c| !c.blocked).map(|c| c.length))
