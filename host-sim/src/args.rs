@@ -278,3 +278,139 @@ impl ScenarioArgs {
         self.body.apply(sc)
     }
 }
+
+/// The paper's setting beyond its planners, one group for every command that plans: how
+/// the lengths, Algorithms 4-6 and the rewiring budgets, and the work per call follow the
+/// paper. "paper" means one thing on the command line: `--planners paper` (or `all`) is the
+/// paper's planner with Table 2's parameters, and `--paper` runs it the way the paper did
+/// (everything below at once).
+#[derive(Args, Clone, Debug)]
+pub(crate) struct FidelityArgs {
+    /// The paper's whole setting: Table 2's lengths, Algorithms 4-6 and the Meet as printed
+    /// and, where a command has a pace, the paper's (with --clock virtual). With
+    /// `--planners paper` or `all`: the paper's planners as the paper ran them.
+    #[arg(long)]
+    paper: bool,
+    /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
+    /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
+    /// proportional to the map's size off that range; README "Lengths that follow the map").
+    #[arg(long)]
+    paper_lengths: bool,
+    /// Parts of Algorithms 4-6 and the Meet run exactly as printed instead of this crate's
+    /// reading (src/rewire/mod.rs): `all`, `none`, or a comma-separated list of alg4-take
+    /// (Algorithm 4 dequeues x_r2), alg6-take (Algorithm 6 pops x_r2), alg6-cost
+    /// (Algorithm 6's cost test through x_r1), alg6-clear (Algorithm 6's clearing test on
+    /// Second(S)), meet-all-pairs (the Meet tests every pair within sigma).
+    #[arg(long, value_name = "PARTS", default_value = "none")]
+    as_printed: String,
+    /// The reference's rewiring budgets: every expansion spends its full t_root / t_goal
+    /// (default: 24 visits per phase and expansion).
+    #[arg(long)]
+    faithful: bool,
+    /// Work per call: `full` (as much as t_exp allows here) or `paper` (the paper's pace:
+    /// 20 expansions and 8 rewiring visits per phase and expansion, every call lasting its
+    /// full t_exp on the virtual clock; needs --clock virtual).
+    #[arg(long, value_enum, default_value = "full")]
+    pace: host_sim::results::Pace,
+}
+
+impl FidelityArgs {
+    /// Table 2's lengths as printed.
+    pub(crate) fn paper_lengths(&self) -> bool {
+        self.paper || self.paper_lengths
+    }
+
+    /// The parts of Algorithms 4-6 and the Meet run as printed.
+    pub(crate) fn as_printed(&self) -> Result<bi_am_rrt::AsPrinted> {
+        if self.paper {
+            return Ok(bi_am_rrt::AsPrinted::ALL);
+        }
+        host_sim::sim::planners::parse_as_printed(&self.as_printed)
+    }
+
+    /// The reference's rewiring budgets.
+    pub(crate) fn faithful(&self) -> bool {
+        self.faithful
+    }
+
+    /// The work per call.
+    pub(crate) fn pace(&self) -> host_sim::results::Pace {
+        if self.paper {
+            host_sim::results::Pace::Paper
+        } else {
+            self.pace
+        }
+    }
+
+    /// The reading and the budgets on each planner's named configuration (before its
+    /// lengths are fitted and its overrides applied: an override of the same value wins),
+    /// for a command whose study does not take them itself; refuses the paper's pace where
+    /// the command has none.
+    pub(crate) fn apply(
+        &self,
+        variants: &mut [host_sim::sim::planners::Variant],
+        has_pace: bool,
+    ) -> Result<()> {
+        if !has_pace && self.pace == host_sim::results::Pace::Paper {
+            bail!("this command has no pace: --pace paper is for run and experiment");
+        }
+        let printed = self.as_printed()?;
+        for v in variants {
+            for c in [&mut v.named.cfg, &mut v.cfg.cfg] {
+                c.as_printed = printed;
+                if self.faithful {
+                    c.rewiring.mode = bi_am_rrt::RewireMode::Faithful;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Line {
+        #[command(flatten)]
+        fidelity: FidelityArgs,
+        #[command(flatten)]
+        planners: PlannerArgs,
+    }
+
+    /// `--paper` is the paper's whole setting; without it, this crate's reading at full
+    /// speed; a command without a pace refuses the paper's.
+    #[test]
+    fn paper_is_one_setting() {
+        let line = Line::try_parse_from(["t", "--paper", "--planners", "paper"]).unwrap();
+        let f = &line.fidelity;
+        assert!(f.paper_lengths());
+        assert_eq!(f.as_printed().unwrap(), bi_am_rrt::AsPrinted::ALL);
+        assert_eq!(f.pace(), host_sim::results::Pace::Paper);
+        let mut v = line.planners.variants().unwrap();
+        f.apply(&mut v, true).unwrap();
+        assert_eq!(v[0].named.cfg.as_printed, bi_am_rrt::AsPrinted::ALL);
+        assert_eq!(v[0].named.cfg.tactics, bi_am_rrt::Tactics::NONE);
+
+        let line = Line::try_parse_from(["t"]).unwrap();
+        let f = &line.fidelity;
+        assert!(!f.paper_lengths());
+        assert_eq!(f.as_printed().unwrap(), bi_am_rrt::AsPrinted::NONE);
+        assert_eq!(f.pace(), host_sim::results::Pace::Full);
+        let mut v = line.planners.variants().unwrap();
+        let before = v[0].named;
+        f.apply(&mut v, false).unwrap();
+        assert_eq!(v[0].named, before, "the defaults change nothing");
+
+        let line = Line::try_parse_from(["t", "--pace", "paper", "--faithful"]).unwrap();
+        let mut v = line.planners.variants().unwrap();
+        assert!(line.fidelity.apply(&mut v, false).is_err());
+        line.fidelity.apply(&mut v, true).unwrap();
+        assert_eq!(
+            v[0].named.cfg.rewiring.mode,
+            bi_am_rrt::RewireMode::Faithful
+        );
+    }
+}

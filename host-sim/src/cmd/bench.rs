@@ -43,11 +43,8 @@ pub struct Cmd {
     /// "us" are virtual).
     #[arg(long, value_enum, default_value = "cpu")]
     clock: host_sim::study::bench::BenchClock,
-    /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
-    /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
-    /// proportional to the map's size off that range; README "Lengths that follow the map").
-    #[arg(long)]
-    paper_lengths: bool,
+    #[command(flatten)]
+    fidelity: crate::args::FidelityArgs,
     /// Warm queries: each query runs on the caches the previous one left. By default
     /// (cold, what a user's one query meets) the caches are flushed before every
     /// measured query, ours, OMPL's and the grid planners' (64 MiB written and read
@@ -84,7 +81,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         out,
         ompl,
         clock,
-        paper_lengths,
+        fidelity,
         warm,
         cold: _,
         until_first,
@@ -100,9 +97,10 @@ pub fn main(cmd: Cmd) -> Result<()> {
         "bench compares path costs with OMPL's, which are lengths",
     )?;
     for s in &mut scs {
-        s.paper_lengths = paper_lengths;
+        s.paper_lengths = fidelity.paper_lengths();
     }
-    let variants = planners.variants()?;
+    let mut variants = planners.variants()?;
+    fidelity.apply(&mut variants, false)?;
     host_sim::study::bench::run(&host_sim::study::bench::BenchArgs {
         scenarios: scs,
         legs: legs.unwrap_or_default(),

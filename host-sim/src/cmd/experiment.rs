@@ -32,9 +32,8 @@ pub struct Cmd {
     /// Parallel jobs (default: all cores).
     #[arg(long)]
     jobs: Option<usize>,
-    /// Rewiring as the reference (every expansion spends its full t_root/t_goal).
-    #[arg(long)]
-    faithful: bool,
+    #[command(flatten)]
+    fidelity: crate::args::FidelityArgs,
     #[command(flatten)]
     table: TableArgs,
     /// Planning time per call in ms (default: the paper's 150).
@@ -65,26 +64,10 @@ pub struct Cmd {
     /// benchmark does (default: from when the goal joins the tree).
     #[arg(long)]
     wait_from_set: bool,
-    /// Work per call: `full` (as much as t_exp allows here) or `paper` (the paper's pace:
-    /// 20 expansions and 8 rewiring visits per phase and expansion, every call lasting
-    /// its full t_exp on the virtual clock; needs --clock virtual).
-    #[arg(long, value_enum, default_value = "full")]
-    pace: host_sim::results::Pace,
     /// Skip each leg's exact optimum (`optimal_m` and `travelled_ratio` stay empty): on maps
     /// with tens of thousands of obstacle corners it can take long.
     #[arg(long)]
     no_optimum: bool,
-    /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
-    /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
-    /// proportional to the map's size off that range; README "Lengths that follow the map").
-    #[arg(long)]
-    paper_lengths: bool,
-    /// Parts of Algorithms 4 and 6 run exactly as printed instead of this crate's reading
-    /// (src/rewire/mod.rs): `all`, `none`, or a comma-separated list of alg4-take (Algorithm
-    /// 4 dequeues x_r2), alg6-take (Algorithm 6 pops x_r2), alg6-cost (Algorithm 6's
-    /// cost test through x_r1), alg6-clear (Algorithm 6's clearing test on Second(S)).
-    #[arg(long, default_value = "none")]
-    as_printed: String,
     /// The paper's Meet: every pair within sigma is tested for a free segment, not only
     /// the 16 cheapest.
     #[arg(long)]
@@ -107,7 +90,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         goals,
         seed,
         jobs,
-        faithful,
+        fidelity,
         table,
         t_exp_ms,
         search_only,
@@ -117,22 +100,19 @@ pub fn main(cmd: Cmd) -> Result<()> {
         overwrite,
         out,
         wait_from_set,
-        pace,
         no_optimum,
-        paper_lengths,
-        as_printed,
         meet_all_pairs,
         obstacle,
     } = cmd;
     let mut scs = scenarios.all()?;
     for s in &mut scs {
-        s.paper_lengths = paper_lengths;
+        s.paper_lengths = fidelity.paper_lengths();
     }
     experiment::run(&ExperimentArgs {
         wait_from_set,
-        pace,
+        pace: fidelity.pace(),
         no_optimum,
-        as_printed: host_sim::sim::planners::parse_as_printed(&as_printed)?,
+        as_printed: fidelity.as_printed()?,
         meet_all_pairs,
         obstacle,
         shard,
@@ -150,7 +130,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         goals,
         seed,
         jobs,
-        faithful,
+        faithful: fidelity.faithful(),
         search_only,
         anytime_ms,
         table: table.options(),

@@ -33,14 +33,8 @@ pub struct Cmd {
     /// Planning time per call in ms (default: the paper's 150).
     #[arg(long)]
     t_exp_ms: Option<u64>,
-    /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
-    /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
-    /// proportional to the map's size off that range; README "Lengths that follow the map").
-    #[arg(long)]
-    paper_lengths: bool,
-    /// Work per call, as `experiment --pace` (`paper` needs --clock virtual).
-    #[arg(long, value_enum, default_value = "full")]
-    pace: host_sim::results::Pace,
+    #[command(flatten)]
+    fidelity: crate::args::FidelityArgs,
     /// Also write an animated GIF of the run (run.gif), one frame every N plan calls.
     #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "2",
               value_parser = clap::value_parser!(u32).range(1..))]
@@ -64,15 +58,16 @@ pub fn main(cmd: Cmd) -> Result<()> {
         out,
         animate,
         t_exp_ms,
-        paper_lengths,
-        pace,
+        fidelity,
         no_optimum,
     } = cmd;
     let mut sc = scenarios.one(Some("bug_trap"))?;
-    sc.paper_lengths = paper_lengths;
+    sc.paper_lengths = fidelity.paper_lengths();
+    let mut planner = vec![planner.one()?];
+    fidelity.apply(&mut planner, true)?;
     run::run(&RunArgs {
         scenario: sc,
-        planner: planner.one()?,
+        planner: planner.remove(0),
         all_goals,
         seed,
         clock,
@@ -80,7 +75,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         out,
         animate,
         t_exp: t_exp_ms.map(std::time::Duration::from_millis),
-        pace,
+        pace: fidelity.pace(),
         no_optimum,
     })
 }
