@@ -234,14 +234,6 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         .filter(|p| goal1.iter().any(|r| &r.planner == *p))
         .cloned()
         .collect();
-    let cell = |p: &str, m: &str| {
-        let rs: Vec<&Row> = goal1
-            .iter()
-            .filter(|r| r.planner == p && r.scenario == m)
-            .copied()
-            .collect();
-        Cell::of(&rs)
-    };
     let stem = out.with_extension("");
     let chart_dir = stem.clone();
     std::fs::create_dir_all(&chart_dir).with_context(|| format!("{}", chart_dir.display()))?;
@@ -249,6 +241,14 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         .file_name()
         .map(|f| f.to_string_lossy().to_string())
         .unwrap_or_default();
+    let page = Page {
+        settings,
+        goal1,
+        maps,
+        planners,
+        chart_dir,
+        rel,
+    };
     let mut charts = Vec::new();
     let mut md = String::new();
     let done = crate::results::done_runs(&rows).len();
@@ -302,9 +302,81 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
     // The notes go here once every figure they may quote is known (`fill`).
     let notes_at = md.len();
 
-    // Fig. 6: one chart per scheme.
-    // (scheme, map, search change, path change, the originals of the complete pairs).
-    type SchemeChange = (Scheme, String, Option<f64>, Option<f64>, Vec<String>);
+    let scheme_changes = fig6_charts(&page, &mut charts)?;
+    box_plots(&page, &mut charts)?;
+    fig6_claims(&page, &scheme_changes, &charts, &mut md);
+    planner_tables(&page, &mut md);
+    // Fig. 7: a disc dropped on the path.
+    if page.goal1.iter().any(|r| r.disc_r_m.is_some()) {
+        fig7(
+            &mut md,
+            &mut charts,
+            &page.goal1,
+            &page.planners,
+            &page.maps,
+            settings,
+            &page.chart_dir,
+            &page.rel,
+        )?;
+    }
+    if let Some(n) = notes {
+        let filled = fill(n, |args| resolve_note(&page, &scheme_changes, args))
+            .context("the notes quote the data")?;
+        md.insert_str(notes_at, &format!("{}\n\n", filled.trim_end()));
+    }
+    table3(&manifest, &mut md);
+    if let Some(dir) = out.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(out, md).with_context(|| format!("{}", out.display()))?;
+    Ok(Report {
+        markdown: out.to_path_buf(),
+        charts,
+    })
+}
+
+/// What every part of a report reads: the folder's goal-1 rows, its maps and planners in the
+/// matrix's order, and where the charts go (`rel`: that folder as the page links it).
+struct Page<'a> {
+    settings: &'a crate::results::Settings,
+    goal1: Vec<&'a Row>,
+    maps: Vec<String>,
+    planners: Vec<String>,
+    chart_dir: PathBuf,
+    rel: String,
+}
+
+impl Page<'_> {
+    /// The goal-1 rows of planner `p` on map `m`.
+    fn cell(&self, p: &str, m: &str) -> Cell {
+        let rs: Vec<&Row> = self
+            .goal1
+            .iter()
+            .filter(|r| r.planner == p && r.scenario == m)
+            .copied()
+            .collect();
+        Cell::of(&rs)
+    }
+}
+
+/// A scheme's change on one map: (scheme, map, search change, path change, the originals of
+/// the complete pairs).
+type SchemeChange = (Scheme, String, Option<f64>, Option<f64>, Vec<String>);
+
+/// Fig. 6: one chart per scheme (each original against its modified planner), and each
+/// scheme's change of the means per map.
+fn fig6_charts(page: &Page<'_>, charts: &mut Vec<PathBuf>) -> Result<Vec<SchemeChange>> {
+    let Page {
+        settings,
+        goal1,
+        maps,
+        planners,
+        chart_dir,
+        ..
+    } = page;
+    let cell = |p: &str, m: &str| page.cell(p, m);
     let mut scheme_changes: Vec<SchemeChange> = Vec::new();
     for sch in [Scheme::Bidirectional, Scheme::Rewiring, Scheme::Both] {
         let pairs: Vec<(String, String)> = planners
@@ -322,7 +394,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             ("search time, mean (ms)", true),
             ("path length, mean (m)", false),
         ] {
-            for m in &maps {
+            for m in maps {
                 let mut values = Vec::new();
                 let mut notes = Vec::new();
                 for (o, p) in &pairs {
@@ -379,7 +451,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             &file,
         )?;
         charts.push(file);
-        for m in &maps {
+        for m in maps {
             // Only complete pairs: both planners with a mean search time and path length.
             let mut ds = Vec::new();
             let mut dp = Vec::new();
@@ -404,9 +476,21 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             scheme_changes.push((sch, m.clone(), mean(&ds), mean(&dp), used));
         }
     }
+    Ok(scheme_changes)
+}
 
+/// Box plots per map (search time, travelled / optimum, nodes at goal) of every planner.
+fn box_plots(page: &Page<'_>, charts: &mut Vec<PathBuf>) -> Result<()> {
+    let Page {
+        settings,
+        maps,
+        planners,
+        chart_dir,
+        ..
+    } = page;
+    let cell = |p: &str, m: &str| page.cell(p, m);
     // Box plots and nodes at goal.
-    for m in &maps {
+    for m in maps {
         let cells: Vec<Cell> = planners.iter().map(|p| cell(p, m)).collect();
         let file = chart_dir.join(format!("box-{m}"));
         let mut boxes = Boxes {
@@ -447,7 +531,17 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         render(&boxes, &file)?;
         charts.push(file);
     }
+    Ok(())
+}
 
+/// The Markdown of Fig. 6: the paper's claims next to the measured scheme changes.
+fn fig6_claims(
+    page: &Page<'_>,
+    scheme_changes: &[SchemeChange],
+    charts: &[PathBuf],
+    md: &mut String,
+) {
+    let rel = &page.rel;
     // Markdown: the paper's claims next to the measured scheme changes.
     let _ = writeln!(md, "## Fig. 6: what each scheme changes\n");
     let _ = writeln!(
@@ -461,7 +555,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         md,
         "| scheme | map | search time | path length | averaged over (originals) |\n|---|---|---:|---:|---|"
     );
-    for (sch, m, ds, dp, used) in &scheme_changes {
+    for (sch, m, ds, dp, used) in scheme_changes {
         let _ = writeln!(
             md,
             "| {} | {m} | {} | {} | {} |",
@@ -484,7 +578,19 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             let _ = writeln!(md, "\n![{f}]({rel}/{f}.svg)");
         }
     }
+}
 
+/// Every planner per map (goal 1): the headline tables.
+fn planner_tables(page: &Page<'_>, md: &mut String) {
+    let Page {
+        settings,
+        goal1,
+        maps,
+        planners,
+        rel,
+        ..
+    } = page;
+    let cell = |p: &str, m: &str| page.cell(p, m);
     // Headline tables.
     let _ = writeln!(md, "\n## Every planner, per map (goal 1)\n");
     let _ = writeln!(
@@ -494,7 +600,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
          with the two-sided Mann-Whitney p-value of the two samples (seeds): p above 0.05, the \
          change is within seed noise.\n"
     );
-    for m in &maps {
+    for m in maps {
         let optimum = goal1
             .iter()
             .find(|r| &r.scenario == m)
@@ -516,7 +622,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
                 "reached"
             }
         );
-        for p in &planners {
+        for p in planners {
             let c = cell(p, m);
             let s = Spread::of(c.search_s.clone());
             let r = Spread::of(c.ratio.clone());
@@ -562,134 +668,122 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         }
         let _ = writeln!(md, "\n![box plots of {m}]({rel}/box-{m}.svg)\n");
     }
+}
 
-    // Fig. 7: a disc dropped on the path.
-    if goal1.iter().any(|r| r.disc_r_m.is_some()) {
-        fig7(
-            &mut md,
-            &mut charts,
-            &goal1,
-            &planners,
-            &maps,
-            settings,
-            &chart_dir,
-            &rel,
-        )?;
-    }
-
-    if let Some(n) = notes {
-        let resolve = |args: &[&str]| -> Result<String> {
-            let [stat, measure, rest @ ..] = args else {
-                anyhow::bail!("expected STAT|MEASURE|...");
-            };
-            if *stat == "maps" {
-                // {{maps|MEASURE|PLANNER|MAP_A|MAP_B}}: medians on both maps and the
-                // Mann-Whitney p of the two samples, e.g. `600 -> 300 ms (p 0.02)`.
-                let [planner, a, b] = rest else {
-                    anyhow::bail!("expected maps|MEASURE|PLANNER|MAP_A|MAP_B");
-                };
-                anyhow::ensure!(
-                    planners.iter().any(|p| p == planner)
-                        && maps.iter().any(|m| m == a)
-                        && maps.iter().any(|m| m == b),
-                    "no planner {planner:?} on maps {a:?} and {b:?} in this folder"
-                );
-                let (ca, cb) = (cell(planner, a), cell(planner, b));
-                let (sa, sb) = (ca.measure(measure)?, cb.measure(measure)?);
-                let p = crate::results::stats::mann_whitney_p(sa, sb)
-                    .map_or(String::new(), |p| format!(" (p {p:.2})"));
-                return Ok(format!(
-                    "{} -> {}{p}",
-                    show_measure(measure, Spread::of(sa.to_vec()).median),
-                    show_measure(measure, Spread::of(sb.to_vec()).median)
-                ));
-            }
-            let scheme_of = |label: &str| -> Result<Scheme> {
-                Ok(match label {
-                    "-1" => Scheme::Bidirectional,
-                    "-2" => Scheme::Rewiring,
-                    "bi" => Scheme::Both,
-                    _ => anyhow::bail!("scheme {label:?}: -1, -2 or bi"),
-                })
-            };
-            if *stat == "pairs" {
-                // {{pairs|MEASURE|SCHEME}}: over every planner pair of the scheme on every
-                // map, how many changes of the mean are below zero, and the span of their p.
-                let [label] = rest else {
-                    anyhow::bail!("expected pairs|MEASURE|-1, -2 or bi");
-                };
-                let sch = scheme_of(label)?;
-                let (mut below, mut all, mut ps) = (0, 0, Vec::new());
-                for m in &maps {
-                    for p in &planners {
-                        let Some((s, o)) = scheme(p) else { continue };
-                        if s != sch || !planners.contains(&o) {
-                            continue;
-                        }
-                        let (co, cp) = (cell(&o, m), cell(p, m));
-                        let (a, b) = (co.measure(measure)?, cp.measure(measure)?);
-                        if let Some(c) = change(mean(a), mean(b)) {
-                            all += 1;
-                            below += usize::from(c < 0.0);
-                        }
-                        ps.extend(crate::results::stats::mann_whitney_p(a, b));
-                    }
-                }
-                let lo = ps.iter().copied().reduce(f64::min).context("no pairs")?;
-                let hi = ps.iter().copied().reduce(f64::max).context("no pairs")?;
-                let span = if hi < 0.01 {
-                    "every Mann-Whitney p below 0.01".to_string()
-                } else {
-                    format!("Mann-Whitney p {lo:.2}-{hi:.2}")
-                };
-                return Ok(format!(
-                    "{below} of the {all} planner-map pairs below zero ({span})"
-                ));
-            }
-            if *stat == "scheme" {
-                let [label, map] = rest else {
-                    anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
-                };
-                let sch = scheme_of(label)?;
-                let (_, _, ds, dp, _) = scheme_changes
-                    .iter()
-                    .find(|(s, m, ..)| *s == sch && m == map)
-                    .with_context(|| format!("no scheme {label} on {map:?} in this folder"))?;
-                return Ok(pct(match *measure {
-                    "search" => *ds,
-                    "path" => *dp,
-                    _ => anyhow::bail!("scheme changes are of search or path"),
-                }));
-            }
-            let [planner, map] = rest else {
-                anyhow::bail!("expected {stat}|{measure}|PLANNER|MAP");
-            };
-            anyhow::ensure!(
-                planners.iter().any(|p| p == planner) && maps.iter().any(|m| m == map),
-                "no planner {planner:?} on map {map:?} in this folder"
-            );
-            let c = cell(planner, map);
-            let sample = c.measure(measure)?;
-            let fmt = |v: Option<f64>| show_measure(measure, v);
-            match *stat {
-                "mean" => Ok(fmt(mean(sample))),
-                "median" => Ok(fmt(Spread::of(sample.to_vec()).median)),
-                "max" => Ok(fmt(sample.iter().copied().reduce(f64::max))),
-                "change" => {
-                    let (_, orig) = scheme(planner)
-                        .filter(|(s, _)| *s != Scheme::Original)
-                        .with_context(|| format!("{planner} is an original planner"))?;
-                    let o = cell(&orig, map);
-                    let os = o.measure(measure)?;
-                    Ok(pct_p(change(mean(os), mean(sample)), os, sample))
-                }
-                _ => anyhow::bail!("statistic {stat:?}: mean, median, max, change or scheme"),
-            }
+/// One `{{...}}` of the notes ([`fill`]): a statistic of the folder, as the notes quote it.
+fn resolve_note(page: &Page<'_>, scheme_changes: &[SchemeChange], args: &[&str]) -> Result<String> {
+    let Page { maps, planners, .. } = page;
+    let cell = |p: &str, m: &str| page.cell(p, m);
+    let [stat, measure, rest @ ..] = args else {
+        anyhow::bail!("expected STAT|MEASURE|...");
+    };
+    if *stat == "maps" {
+        // {{maps|MEASURE|PLANNER|MAP_A|MAP_B}}: medians on both maps and the
+        // Mann-Whitney p of the two samples, e.g. `600 -> 300 ms (p 0.02)`.
+        let [planner, a, b] = rest else {
+            anyhow::bail!("expected maps|MEASURE|PLANNER|MAP_A|MAP_B");
         };
-        let filled = fill(n, resolve).context("the notes quote the data")?;
-        md.insert_str(notes_at, &format!("{}\n\n", filled.trim_end()));
+        anyhow::ensure!(
+            planners.iter().any(|p| p == planner)
+                && maps.iter().any(|m| m == a)
+                && maps.iter().any(|m| m == b),
+            "no planner {planner:?} on maps {a:?} and {b:?} in this folder"
+        );
+        let (ca, cb) = (cell(planner, a), cell(planner, b));
+        let (sa, sb) = (ca.measure(measure)?, cb.measure(measure)?);
+        let p = crate::results::stats::mann_whitney_p(sa, sb)
+            .map_or(String::new(), |p| format!(" (p {p:.2})"));
+        return Ok(format!(
+            "{} -> {}{p}",
+            show_measure(measure, Spread::of(sa.to_vec()).median),
+            show_measure(measure, Spread::of(sb.to_vec()).median)
+        ));
     }
+    let scheme_of = |label: &str| -> Result<Scheme> {
+        Ok(match label {
+            "-1" => Scheme::Bidirectional,
+            "-2" => Scheme::Rewiring,
+            "bi" => Scheme::Both,
+            _ => anyhow::bail!("scheme {label:?}: -1, -2 or bi"),
+        })
+    };
+    if *stat == "pairs" {
+        // {{pairs|MEASURE|SCHEME}}: over every planner pair of the scheme on every
+        // map, how many changes of the mean are below zero, and the span of their p.
+        let [label] = rest else {
+            anyhow::bail!("expected pairs|MEASURE|-1, -2 or bi");
+        };
+        let sch = scheme_of(label)?;
+        let (mut below, mut all, mut ps) = (0, 0, Vec::new());
+        for m in maps {
+            for p in planners {
+                let Some((s, o)) = scheme(p) else { continue };
+                if s != sch || !planners.contains(&o) {
+                    continue;
+                }
+                let (co, cp) = (cell(&o, m), cell(p, m));
+                let (a, b) = (co.measure(measure)?, cp.measure(measure)?);
+                if let Some(c) = change(mean(a), mean(b)) {
+                    all += 1;
+                    below += usize::from(c < 0.0);
+                }
+                ps.extend(crate::results::stats::mann_whitney_p(a, b));
+            }
+        }
+        let lo = ps.iter().copied().reduce(f64::min).context("no pairs")?;
+        let hi = ps.iter().copied().reduce(f64::max).context("no pairs")?;
+        let span = if hi < 0.01 {
+            "every Mann-Whitney p below 0.01".to_string()
+        } else {
+            format!("Mann-Whitney p {lo:.2}-{hi:.2}")
+        };
+        return Ok(format!(
+            "{below} of the {all} planner-map pairs below zero ({span})"
+        ));
+    }
+    if *stat == "scheme" {
+        let [label, map] = rest else {
+            anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
+        };
+        let sch = scheme_of(label)?;
+        let (_, _, ds, dp, _) = scheme_changes
+            .iter()
+            .find(|(s, m, ..)| *s == sch && m == map)
+            .with_context(|| format!("no scheme {label} on {map:?} in this folder"))?;
+        return Ok(pct(match *measure {
+            "search" => *ds,
+            "path" => *dp,
+            _ => anyhow::bail!("scheme changes are of search or path"),
+        }));
+    }
+    let [planner, map] = rest else {
+        anyhow::bail!("expected {stat}|{measure}|PLANNER|MAP");
+    };
+    anyhow::ensure!(
+        planners.iter().any(|p| p == planner) && maps.iter().any(|m| m == map),
+        "no planner {planner:?} on map {map:?} in this folder"
+    );
+    let c = cell(planner, map);
+    let sample = c.measure(measure)?;
+    let fmt = |v: Option<f64>| show_measure(measure, v);
+    match *stat {
+        "mean" => Ok(fmt(mean(sample))),
+        "median" => Ok(fmt(Spread::of(sample.to_vec()).median)),
+        "max" => Ok(fmt(sample.iter().copied().reduce(f64::max))),
+        "change" => {
+            let (_, orig) = scheme(planner)
+                .filter(|(s, _)| *s != Scheme::Original)
+                .with_context(|| format!("{planner} is an original planner"))?;
+            let o = cell(&orig, map);
+            let os = o.measure(measure)?;
+            Ok(pct_p(change(mean(os), mean(sample)), os, sample))
+        }
+        _ => anyhow::bail!("statistic {stat:?}: mean, median, max, change or scheme"),
+    }
+}
 
+/// Table 3: map processing.
+fn table3(manifest: &Manifest, md: &mut String) {
     // Table 3.
     let _ = writeln!(md, "## Table 3: map processing\n");
     let _ = writeln!(
@@ -718,16 +812,6 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
             num(t.optima_s * 1e3)
         );
     }
-    if let Some(dir) = out.parent()
-        && !dir.as_os_str().is_empty()
-    {
-        std::fs::create_dir_all(dir)?;
-    }
-    std::fs::write(out, md).with_context(|| format!("{}", out.display()))?;
-    Ok(Report {
-        markdown: out.to_path_buf(),
-        charts,
-    })
 }
 
 /// Writes `out` (Markdown): each folder of `variants` (label, folder) against the folder
