@@ -8,8 +8,8 @@
 //!    on a *virtual* clock advanced by the planner's work, so it prints the same line as
 //!    `examples/twin.rs` on the host, bit for bit (CI compares them).
 //! 2. **Office, in real time**: Bi-AM-RRT*(D) from the office scenario's start to its goal 1
-//!    (or the start and goal 1 of whichever scenario was exported last, a nav2 map say; with
-//!    `BIAMRRT_GOALS=all` at build time through all its goals in turn, `firmware/sequence.sh`),
+//!    (or the start and goal 1 of whichever scenario was exported last, a nav2 map say;
+//!    exported with `--all-goals`, through all its goals in turn, `firmware/sequence.sh`),
 //!    with the occupancy grid and the diffusion table in flash (exported by
 //!    `host-sim export`), `t_exp` = 150 ms measured on SysTick
 //!    ([`bi_am_rrt::cortex::SysTickClock`], 168 MHz core clock), and the agent moving as in the
@@ -22,7 +22,7 @@
 //!
 //! ```sh
 //! cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
-//!     --maps office --out target/flash
+//!     --maps office --planners paper --out target/flash
 //! BIAMRRT_FLASH_DIR=$PWD/target/flash cargo run --release --example firmware \
 //!     --target thumbv7em-none-eabihf --features firmware-example
 //! ```

@@ -15,16 +15,16 @@ cd "$(dirname "$0")/.."
 check=0
 if [ "${1:-}" = --check ]; then check=1; fi
 LLVM_SIZE=$(find "$(rustc --print sysroot)" -name llvm-size -type f | head -n 1)
-cargo run --release -p host-sim -- export --scenarios ../shared/maps/real/scenarios.toml \
-  --maps depot --out target/flash-depot >/dev/null
-export BIAMRRT_FLASH_DIR="$PWD/target/flash-depot" BIAMRRT_GOALS=all
+export BIAMRRT_FLASH_DIR="$PWD/target/flash-depot"
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf --features firmware-example)
 elf=target/thumbv7em-none-eabihf/firmware/examples/firmware
 doc=docs/firmware-depot.txt
 out=target/firmware-depot.txt
 : >"$out"
 for set in paper tuned; do
-  if [ "$set" = tuned ]; then export BIAMRRT_TUNED=1; else unset BIAMRRT_TUNED; fi
+  # The mission (the set, every goal) is the export's, beside the scenario it flies.
+  cargo run --release -p host-sim -- export --scenarios ../shared/maps/real/scenarios.toml \
+    --maps depot --planners "$set" --all-goals --out target/flash-depot >/dev/null
   if ! fw=$(timeout 900 cargo run "${args[@]}" 2>/dev/null); then
     echo "$fw"
     echo "the depot firmware ($set set) failed (a goal not reached, a collision, or a panic)"

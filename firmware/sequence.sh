@@ -32,9 +32,7 @@ while [ $# -gt 0 ]; do
   esac
   shift
 done
-cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
-  --maps office --out target/flash ${radius:+--robot-radius "$radius"} >/dev/null
-export BIAMRRT_FLASH_DIR="$PWD/target/flash" BIAMRRT_GOALS=all
+export BIAMRRT_FLASH_DIR="$PWD/target/flash"
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf)
 cargo=(cargo)
 doc=docs/firmware-sequence.txt
@@ -60,7 +58,10 @@ fi
 out=target/$(basename "$doc")
 : >"$out"
 for set in paper tuned; do
-  if [ "$set" = tuned ]; then export BIAMRRT_TUNED=1; else unset BIAMRRT_TUNED; fi
+  # The mission (the set, every goal) is the export's, beside the scenario it flies.
+  cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
+    --maps office --planners "$set" --all-goals --out target/flash \
+    ${radius:+--robot-radius "$radius"} >/dev/null
   echo "== $set set" | tee -a "$out"
   if ! fw=$(cd "$dir" && timeout 1800 "${cargo[@]}" run "${args[@]}" 2>/dev/null); then
     echo "$fw"

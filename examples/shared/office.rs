@@ -1,20 +1,26 @@
 //! The exported scenario's mission in real time, shared by the firmware example
 //! (`examples/firmware.rs`, Cortex-M4F) and the Cortex-M0+ build (`firmware/m0-twin`): the
-//! planner flies the scenario's goal 1 (or with `BIAMRRT_GOALS=all` at build time all its
-//! goals in turn) on the clock it is given, and prints the per-call times, the path and its
+//! planner flies the scenario's goal 1 (or, exported with `--all-goals`, all its goals in
+//! turn) on the clock it is given, and prints the per-call times, the path and its
 //! checksum. The including crate provides `scenario` (the `host-sim export` statics) and
-//! `hprintln!` at its root. Also built for RISC-V (`firmware/riscv-twin`'s `office`).
+//! `hprintln!` at its root. Also built for RISC-V (`firmware/riscv-twin`'s `office`). The
+//! mission is the export's (`host-sim export --planners tuned|paper --all-goals --walkers N
+//! --door`: `scenario::TUNED`, `ALL_GOALS`, `WALKERS`, `DOOR`), not a build-time variable.
 //!
-//! With `BIAMRRT_WALKERS=n` at build time (1-4), `n` people pace to and fro at 1 m/s across
+//! Exported with `--walkers n` (1-4), `n` people pace to and fro at 1 m/s across
 //! the straight line from the start to goal 1 (6 m either side, evenly along it); before every
 //! call their positions and velocities are submitted (`update_obstacle`) under a stated motion
 //! (issue 27: the cost of moving obstacles on the chip). One protocol call is 0.5 s of the
 //! world's time (the agent's 0.7 m a call is 1.4 m/s).
 //!
-//! With `BIAMRRT_DOOR=1` at build time the map gets a live overlay (a buffer of the grid's size
+//! Exported with `--door` the map gets a live overlay (a buffer of the grid's size
 //! on the stack): a door of 3 x 13 cells across the line from the start to goal 1, halfway,
 //! closes (`set_cells`) when the agent comes within 15 m of it and opens 40 calls later (issue
 //! 27: the cost of live cells on the chip).
+
+// `WALKERS` and `DOOR` are the export's constants: comparing them is what leaves a build
+// without walkers or a door free of their code.
+#![allow(clippy::absurd_extreme_comparisons)]
 
 use bi_am_rrt::agent::{Protocol, run_to_goal};
 use bi_am_rrt::clock::Clock;
@@ -36,14 +42,19 @@ const MAX_CALLS: u32 = 600;
 /// Seconds of the world per protocol call with walkers.
 const WORLD_PERIOD: f32 = 0.5;
 
-/// Walkers (`BIAMRRT_WALKERS` at build time, 0-4): a constant, so that without them none of
+/// Walkers (`host-sim export --walkers`, 0-4): a constant, so that without them none of
 /// their code is built (the flash budget is tight).
-const WALKERS: usize = walkers_from(option_env!("BIAMRRT_WALKERS"));
+const WALKERS: usize = at_most_four(scenario::WALKERS);
 
-/// A door closing and opening across goal 1's line (`BIAMRRT_DOOR` at build time).
-const DOOR: bool = option_env!("BIAMRRT_DOOR").is_some();
+/// A door closing and opening across goal 1's line (`host-sim export --door`).
+const DOOR: bool = scenario::DOOR;
 /// Calls the door stays closed.
 const DOOR_CALLS: u32 = 40;
+
+/// `n`, or 4 if more (the walkers' arrays hold 4).
+const fn at_most_four(n: usize) -> usize {
+    if n > 4 { 4 } else { n }
+}
 
 /// The door's corner cells: 3 cells thick along the line from `start` to `goal`, 13 across it,
 /// centred halfway (clamped to the grid).
@@ -59,19 +70,6 @@ fn door_cells(grid: &OccupancyGrid<'_>, start: Point, goal: Point) -> ((u16, u16
     let lo = (c.saturating_sub(dc), r.saturating_sub(dr));
     let hi = ((c + dc).min(grid.cols() - 1), (r + dr).min(grid.rows() - 1));
     (lo, hi)
-}
-
-/// The decimal digits of `v`, at most 4.
-const fn walkers_from(v: Option<&str>) -> usize {
-    let Some(v) = v else { return 0 };
-    let (b, mut i, mut n) = (v.as_bytes(), 0, 0usize);
-    while i < b.len() {
-        if b[i].is_ascii_digit() {
-            n = n * 10 + (b[i] - b'0') as usize;
-        }
-        i += 1;
-    }
-    if n > 4 { 4 } else { n }
 }
 
 /// Walker `i` of `n` at world time `t`: pacing at 1 m/s over 12 m across the start-goal line.
@@ -141,10 +139,10 @@ impl CallTimes {
     }
 }
 
-/// What the office mission flies: goal 1 from the start (CI's figures), or with
-/// `BIAMRRT_GOALS=all` at build time every goal of the scenario in turn.
+/// What the office mission flies: goal 1 from the start (CI's figures), or, exported with
+/// `--all-goals`, every goal of the scenario in turn.
 fn goals() -> &'static [(f32, f32)] {
-    let all = option_env!("BIAMRRT_GOALS").is_some_and(|g| g == "all");
+    let all = scenario::ALL_GOALS;
     let n = if all { scenario::GOALS.len() } else { 1 };
     scenario::GOALS.get(..n).unwrap_or(&[])
 }
@@ -217,13 +215,9 @@ pub fn exported_mission<C: Clock + ?Sized>(
         }
     };
     // Lengths that follow the map (Table 2's on the office), `sigma` as the scenario gives it.
-    // `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
+    // `host-sim export --planners tuned` flies the tuned set, `paper` the paper's.
     let base = Config::bi_am_rrt();
-    let base = if option_env!("BIAMRRT_TUNED").is_some() {
-        base.tuned()
-    } else {
-        base
-    };
+    let base = if scenario::TUNED { base.tuned() } else { base };
     let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
     cfg.robot_radius = radius;
     let walkers = WALKERS;

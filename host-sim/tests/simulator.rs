@@ -583,8 +583,18 @@ fn stress_runs_are_safe() {
 fn export_writes_a_grid_a_table_and_rust_source() {
     let dir = tempfile::tempdir().unwrap();
     let sc = scenario::builtin_by_name("maze").unwrap();
-    let ex =
-        host_sim::metric::bake::export_flash(&sc, &TableOptions::default(), dir.path()).unwrap();
+    let ex = host_sim::metric::bake::export_flash(
+        &sc,
+        &TableOptions::default(),
+        dir.path(),
+        &host_sim::metric::bake::Mission {
+            tuned: true,
+            all_goals: false,
+            walkers: 3,
+            door: true,
+        },
+    )
+    .unwrap();
     let grid = std::fs::read(dir.path().join("maze.grid")).unwrap();
     let table = std::fs::read(dir.path().join("maze.table")).unwrap();
     assert_eq!(grid, sc.map.bits);
@@ -598,6 +608,11 @@ fn export_writes_a_grid_a_table_and_rust_source() {
         "pub static TABLE: [u8; ",
         "pub const GOALS: [(f32, f32); ",
         "pub const START: (f32, f32) = ",
+        // The mission a firmware flies (issue 43: no build-time variables).
+        "pub const TUNED: bool = true;",
+        "pub const ALL_GOALS: bool = false;",
+        "pub const WALKERS: usize = 3;",
+        "pub const DOOR: bool = true;",
     ] {
         assert!(src.contains(item), "{item}");
     }

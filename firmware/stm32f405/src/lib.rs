@@ -17,7 +17,7 @@
 #![no_std]
 
 use bi_am_rrt::cortex::SysTickClock;
-use bi_am_rrt::{Config, DiffusionTable, Map, MetricKind, OccupancyGrid, Planner, Point, Storage};
+use bi_am_rrt::{Config, DiffusionTable, Map, OccupancyGrid, Planner, Point, Storage};
 use embassy_stm32::time::Hertz;
 use embassy_stm32::wdg::IndependentWatchdog;
 use rand_xorshift::XorShiftRng;

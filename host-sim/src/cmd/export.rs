@@ -25,6 +25,19 @@ pub struct Cmd {
     /// for it is refused with the way out.
     #[arg(long, default_value_t = bake::FIRMWARE_DATA_BYTES)]
     flash_data: usize,
+    /// The planner the firmware flies: `tuned` (the default) or `paper` (Bi-AM-RRT*(D), the
+    /// tuned set or the paper's; the firmware examples fly no other).
+    #[command(flatten)]
+    planners: PlannerArgs,
+    /// The firmware flies every goal of the scenario in turn (default: goal 1).
+    #[arg(long)]
+    all_goals: bool,
+    /// The office firmware's walkers: people pacing across goal 1's way at 1 m/s (0-4).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=4))]
+    walkers: u8,
+    /// The office firmware's door: a live overlay closing and opening across goal 1's line.
+    #[arg(long)]
+    door: bool,
 }
 
 /// Runs the command.
@@ -34,11 +47,30 @@ pub fn main(cmd: Cmd) -> Result<()> {
         out,
         table,
         flash_data,
+        planners,
+        all_goals,
+        walkers,
+        door,
     } = cmd;
+    let planner = planners.one()?;
+    let tuned = match planner.name.as_str() {
+        "Bi-AM-RRT*(D) tuned" => true,
+        "Bi-AM-RRT*(D)" => false,
+        other => anyhow::bail!(
+            "the firmware examples fly Bi-AM-RRT*(D), the tuned set (`--planners tuned`) or \
+             the paper's (`--planners paper`), not {other:?}"
+        ),
+    };
+    let mission = bake::Mission {
+        tuned,
+        all_goals,
+        walkers,
+        door,
+    };
     let sc = scenarios.one(None)?;
     no_clearance(
         std::slice::from_ref(&sc),
         "export does not write a clearance field yet (build one at start-up with bi_am_rrt::clearance::clearance_field)",
     )?;
-    bake::export_command(&sc, &table.options(), &out, flash_data)
+    bake::export_command(&sc, &table.options(), &out, flash_data, &mission)
 }

@@ -408,11 +408,12 @@ pub struct Exported {
 /// Writes a scenario for a firmware into `dir`: `NAME.grid` (the bit-packed grid of
 /// `bi_am_rrt::map`), `NAME.table` (its diffusion table, `table` options) and `NAME.rs`, Rust
 /// source that a firmware `include!`s: the grid and table as `static` byte arrays (flash), the
-/// grid's shape, the start, the goals and `sigma`.
+/// grid's shape, the start, the goals and `sigma`, and the firmware's mission ([`Mission`]).
 pub fn export_flash(
     sc: &crate::scenario::Scenario,
     table: &TableOptions,
     dir: &Path,
+    mission: &Mission,
 ) -> Result<Exported> {
     // With a robot body the table is baked on where its disc can go (the cells with room), and
     // the grid inflated by the cells rule, the planner's fast test, goes to flash beside the
@@ -446,7 +447,15 @@ pub fn export_flash(
          /// The occupancy grid, bit-packed as `bi_am_rrt::map::pack_grid` does.\n{}\
          /// The grid inflated for the robot's disc (`bi_am_rrt::map::inflate`; empty for a point).\n{}\
          /// The diffusion table (`bi_am_rrt::DiffusionTable::new`); max error {:.3e} over {} pairs, \
-         largest distance {:.3e}.\n{}",
+         largest distance {:.3e}.\n{}\
+         /// The mission (`host-sim export --planners`): the tuned Bi-AM-RRT*(D), or the paper's.\n\
+         #[allow(dead_code)]\npub const TUNED: bool = {};\n\
+         /// The mission (`--all-goals`): every goal in turn, or goal 1.\n\
+         #[allow(dead_code)]\npub const ALL_GOALS: bool = {};\n\
+         /// The mission (`--walkers`): people pacing across goal 1's way (0-4).\n\
+         #[allow(dead_code)]\npub const WALKERS: usize = {};\n\
+         /// The mission (`--door`): a door closing and opening across goal 1's line.\n\
+         #[allow(dead_code)]\npub const DOOR: bool = {};\n",
         sc.source,
         name,
         sc.map.width,
@@ -463,6 +472,10 @@ pub fn export_flash(
         error.pairs,
         error.max_distance,
         static_array("TABLE", &baked.table),
+        mission.tuned,
+        mission.all_goals,
+        mission.walkers,
+        mission.door,
     );
     let source = dir.join(format!("{name}.rs"));
     write_file(&source, src.as_bytes())?;
@@ -623,6 +636,22 @@ pub fn flash_table_options(
     Ok(t)
 }
 
+/// What a firmware flies with the scenario it includes: the options it used to read from
+/// build-time environment variables, now written beside the scenario by `host-sim export`
+/// (`scenario.rs`'s `TUNED`, `ALL_GOALS`, `WALKERS`, `DOOR`), so a firmware's whole
+/// configuration comes from the one command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Mission {
+    /// The tuned Bi-AM-RRT*(D) (else the paper's).
+    pub tuned: bool,
+    /// Every goal in turn (else goal 1).
+    pub all_goals: bool,
+    /// People pacing across goal 1's way, 0-4.
+    pub walkers: u8,
+    /// A door closing and opening across goal 1's line.
+    pub door: bool,
+}
+
 /// `host-sim export`: writes a scenario's flash files ([`export_flash`]) within `flash_data`
 /// bytes ([`flash_table_options`]) and prints their sizes and the table's error.
 pub fn export_command(
@@ -630,10 +659,11 @@ pub fn export_command(
     table: &TableOptions,
     out: &Path,
     flash_data: usize,
+    mission: &Mission,
 ) -> Result<()> {
     let t0 = Instant::now();
     let table = &flash_table_options(sc, table, flash_data)?;
-    let ex = export_flash(sc, table, out)?;
+    let ex = export_flash(sc, table, out, mission)?;
     let e = &ex.error;
     println!(
         "{}: grid {} bytes, table {} bytes (max error {:.3e} = {:.2} % of the largest distance {:.3e} over {} pairs) in {:.1} s -> {}",

@@ -6,11 +6,11 @@
 //!
 //! ```sh
 //! cargo run --release -p host-sim -- export --scenarios ../shared/maps/scenarios.toml \
-//!     --scenario office --out target/flash
+//!     --maps office --planners paper --out target/flash
 //! cd firmware/stm32f405 && BIAMRRT_FLASH_DIR=$PWD/../../target/flash cargo run --release --bin board
 //! ```
 //!
-//! `BIAMRRT_TUNED=1` at build time flies the tuned set instead of the paper's.
+//! Exported with `--planners tuned` it flies the tuned set, with `--planners paper` the paper's.
 #![no_std]
 #![no_main]
 
@@ -34,7 +34,7 @@ fn SysTick() {
 #[entry]
 fn main() -> ! {
     let (mut dog, clock) = stm32f405_board::bring_up();
-    let tuned = option_env!("BIAMRRT_TUNED").is_some();
+    let tuned = stm32f405_board::scenario::TUNED;
     let mut planner = match planner(STORAGE.take(), tuned, bi_am_rrt::Motion::NONE) {
         Ok(planner) => planner,
         Err(e) => defmt::panic!("planner: {}", e),

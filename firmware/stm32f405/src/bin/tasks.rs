@@ -110,11 +110,7 @@ async fn main(spawner: Spawner) {
         horizon: 1.5,
         obstacle_speed: 1.5,
     };
-    let planner = match planner(
-        STORAGE.take(),
-        option_env!("BIAMRRT_TUNED").is_some(),
-        motion,
-    ) {
+    let planner = match planner(STORAGE.take(), stm32f405_board::scenario::TUNED, motion) {
         Ok(planner) => planner,
         Err(e) => defmt::panic!("planner: {}", e),
     };
