@@ -86,7 +86,7 @@ pub fn flush_caches() {
     std::hint::black_box(sum);
 }
 
-/// A bench run's clock: [`ClockKind`] (`cpu`, the default; `wall`, the monotonic clock, a
+/// A bench run's clock: [`crate::sim::clock::ClockKind`] (`cpu`, the default; `wall`, the monotonic clock, a
 /// vDSO read of about 20 ns where thread CPU time is a system call of about 0.4 us, and the
 /// clock OMPL's timed termination condition reads in its loop; `virtual`).
 pub type BenchClock = crate::sim::clock::ClockKind;
