@@ -17,6 +17,7 @@
 //! several machines) into one; a run present twice is an error.
 
 pub mod stats;
+pub mod table;
 
 use std::collections::BTreeSet;
 use std::fs::{self, File, OpenOptions};

@@ -25,6 +25,7 @@ use serde::Serialize;
 
 use crate::metric::optimum::leg_starts;
 use crate::results::stats::median;
+use crate::results::table::{Cell, Column, Table};
 use crate::scenario::Scenario;
 use crate::sim::clock::{CpuClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
 use crate::sim::planners::Variant;
@@ -794,73 +795,55 @@ pub fn summarise(rows: &[BenchRow], budgets: &[f64]) -> Vec<SummaryRow> {
         .collect()
 }
 
-fn f(v: Option<f64>, digits: usize) -> String {
-    v.map(|v| format!("{v:.digits$}"))
-        .unwrap_or_else(|| "-".into())
+/// The summary as one table ([`crate::results::table`]): `summary.csv` and `summary.md`.
+fn summary_table(rows: &[SummaryRow], budgets: &[f64]) -> Table {
+    let mut columns = vec![
+        Column::text("map", "map"),
+        Column::text("planner", "planner"),
+        Column::text("legs_solved,legs", "legs solved"),
+        Column::number("first_us", "first solution (us)"),
+        Column::number("first_ratio", "first path / opt"),
+    ];
+    for b in budgets {
+        columns.push(Column::number(
+            format!("cost_ratio_{b}s"),
+            format!("cost at {b} s / opt"),
+        ));
+    }
+    columns.extend([
+        Column::number("nodes", "nodes"),
+        Column::number("expansions_per_s", "expansions/s"),
+        Column::number("reads_per_expansion", "clock reads/expansion"),
+    ]);
+    let rows = rows
+        .iter()
+        .map(|r| {
+            let mut cells = vec![
+                Cell::Text(r.map.clone()),
+                Cell::Quoted(r.planner.clone()),
+                Cell::Fraction(r.solved.0, r.solved.1),
+                Cell::Number(r.first_us, 1, 0),
+                Cell::Number(r.first_ratio, 4, 3),
+            ];
+            cells.extend(r.cost_ratio.iter().map(|c| Cell::Number(*c, 4, 3)));
+            cells.extend([
+                Cell::Number(r.nodes, 0, 0),
+                Cell::Number(r.expansions_per_s, 0, 0),
+                Cell::Number(r.reads_per_expansion, 1, 1),
+            ]);
+            cells
+        })
+        .collect();
+    Table { columns, rows }
 }
 
 fn summary_csv(rows: &[SummaryRow], budgets: &[f64]) -> String {
-    let mut s = String::from("map,planner,legs_solved,legs,first_us,first_ratio");
-    for b in budgets {
-        s.push_str(&format!(",cost_ratio_{b}s"));
-    }
-    s.push_str(",nodes,expansions_per_s,reads_per_expansion\n");
-    for r in rows {
-        s.push_str(&format!(
-            "{},\"{}\",{},{},{},{}",
-            r.map,
-            r.planner,
-            r.solved.0,
-            r.solved.1,
-            f(r.first_us, 1),
-            f(r.first_ratio, 4)
-        ));
-        for c in &r.cost_ratio {
-            s.push_str(&format!(",{}", f(*c, 4)));
-        }
-        s.push_str(&format!(
-            ",{},{},{}\n",
-            f(r.nodes, 0),
-            f(r.expansions_per_s, 0),
-            f(r.reads_per_expansion, 1)
-        ));
-    }
-    s
+    summary_table(rows, budgets).csv()
 }
 
-/// The summary as a Markdown table.
+/// The summary as Markdown (`summary.md`, printed at the end).
 pub fn summary_markdown(rows: &[SummaryRow], budgets: &[f64]) -> String {
-    let mut s =
-        String::from("| map | planner | legs solved | first solution (us) | first path / opt |");
-    for b in budgets {
-        s.push_str(&format!(" cost at {b} s / opt |"));
-    }
-    s.push_str(" nodes | expansions/s | clock reads/expansion |\n|---|---|---|---:|---:|");
-    for _ in budgets {
-        s.push_str("---:|");
-    }
-    s.push_str("---:|---:|---:|\n");
-    for r in rows {
-        s.push_str(&format!(
-            "| {} | {} | {}/{} | {} | {} |",
-            r.map,
-            r.planner,
-            r.solved.0,
-            r.solved.1,
-            f(r.first_us, 0),
-            f(r.first_ratio, 3)
-        ));
-        for c in &r.cost_ratio {
-            s.push_str(&format!(" {} |", f(*c, 3)));
-        }
-        s.push_str(&format!(
-            " {} | {} | {} |\n",
-            f(r.nodes, 0),
-            f(r.expansions_per_s, 0),
-            f(r.reads_per_expansion, 1)
-        ));
-    }
-    s
+    summary_table(rows, budgets).markdown()
 }
 
 /// Per leg, the median over seeds of `f` (a run without a value counts as infinite), for one
