@@ -229,45 +229,21 @@ macro_rules! value {
 
 macro_rules! store {
     (real, $f:expr, $v:expr) => {
-        match $v {
-            Value::Real(x) => {
-                $f = x;
-                Some(())
-            }
-            _ => None,
-        }
+        store!(@as Real, $f, $v)
+    };
+    (count32, $f:expr, $v:expr) => {
+        store!(@as Count, $f, $v)
+    };
+    (millis, $f:expr, $v:expr) => {
+        store!(@as Millis, $f, $v)
+    };
+    (switch, $f:expr, $v:expr) => {
+        store!(@as Switch, $f, $v)
     };
     (count16, $f:expr, $v:expr) => {
         match $v {
             Value::Count(n) => {
                 $f = narrow(n)?;
-                Some(())
-            }
-            _ => None,
-        }
-    };
-    (count32, $f:expr, $v:expr) => {
-        match $v {
-            Value::Count(n) => {
-                $f = n;
-                Some(())
-            }
-            _ => None,
-        }
-    };
-    (millis, $f:expr, $v:expr) => {
-        match $v {
-            Value::Millis(d) => {
-                $f = d;
-                Some(())
-            }
-            _ => None,
-        }
-    };
-    (switch, $f:expr, $v:expr) => {
-        match $v {
-            Value::Switch(b) => {
-                $f = b;
                 Some(())
             }
             _ => None,
@@ -296,6 +272,16 @@ macro_rules! store {
         match $v {
             Value::Count(n) => {
                 $f = RewireMode::PerExpansion { visits: narrow(n)? };
+                Some(())
+            }
+            _ => None,
+        }
+    };
+    // A value stored as it is, when it is of the field's kind.
+    (@as $kind:ident, $f:expr, $v:expr) => {
+        match $v {
+            Value::$kind(x) => {
+                $f = x;
                 Some(())
             }
             _ => None,
