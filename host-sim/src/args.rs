@@ -356,12 +356,12 @@ impl FidelityArgs {
         }
         let printed = self.as_printed()?;
         for v in variants {
-            for c in [&mut v.named.cfg, &mut v.cfg.cfg] {
+            v.edit_named(|c| {
                 c.as_printed = printed;
                 if self.faithful {
                     c.rewiring.mode = bi_am_rrt::RewireMode::Faithful;
                 }
-            }
+            })?;
         }
         Ok(())
     }

@@ -11,7 +11,7 @@ mod names;
 mod params;
 mod tactics;
 pub use names::{Named, PlannerName};
-pub use params::{PAPER_VISITS, PARAMS, Param, SetError, Value, param, set};
+pub use params::{NAMED_SET_VISITS, PARAMS, Param, SetError, Value, param, set};
 pub use tactics::Tactics;
 
 /// The base real-time planner.
@@ -376,7 +376,9 @@ impl Config {
             rewiring: Rewiring {
                 t_root: Duration::from_millis(t_root),
                 t_goal: Duration::from_millis(t_goal),
-                mode: RewireMode::PerExpansion { visits: 24 },
+                mode: RewireMode::PerExpansion {
+                    visits: NAMED_SET_VISITS,
+                },
                 path_shortcuts: 0,
                 root_step: 0.0,
             },

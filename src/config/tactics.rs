@@ -92,23 +92,6 @@ impl Tactics {
         "open_frontier",
     ];
 
-    /// The switch named `name` (one of [`Tactics::NAMES`]), to read or set.
-    pub fn get_mut(&mut self, name: &str) -> Option<&mut bool> {
-        Some(match name {
-            "steer_fan" => &mut self.steer_fan,
-            "nearest_step" => &mut self.nearest_step,
-            "reuse_tests" => &mut self.reuse_tests,
-            "rewire_after_join" => &mut self.rewire_after_join,
-            "connect" => &mut self.connect,
-            "rewire_new" => &mut self.rewire_new,
-            "density_trades" => &mut self.density_trades,
-            "recycle_when_full" => &mut self.recycle_when_full,
-            "corner_cuts" => &mut self.corner_cuts,
-            "open_frontier" => &mut self.open_frontier,
-            _ => return None,
-        })
-    }
-
     /// The switches in [`Tactics::NAMES`] order.
     pub const fn as_array(&self) -> [bool; 10] {
         [

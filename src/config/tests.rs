@@ -202,7 +202,7 @@ fn the_table_holds_every_value() {
     assert_eq!(
         c.rewiring.mode,
         RewireMode::PerExpansion {
-            visits: PAPER_VISITS
+            visits: NAMED_SET_VISITS
         }
     );
 }

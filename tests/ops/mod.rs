@@ -168,9 +168,12 @@ fn run_with<M: Metric>(
     if flags & 1 != 0 {
         let bits = b.u16();
         for (i, name) in bi_am_rrt::Tactics::NAMES.iter().enumerate() {
-            if let Some(on) = cfg.tactics.get_mut(name) {
-                *on = bits & (1 << i) != 0;
-            }
+            let on = if bits & (1 << i) != 0 {
+                "true"
+            } else {
+                "false"
+            };
+            bi_am_rrt::config::set(&mut cfg, name, on).map_err(|e| format!("{name}: {e}"))?;
         }
     }
     if flags & 2 != 0 {

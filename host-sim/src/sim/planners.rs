@@ -116,16 +116,29 @@ impl Variant {
     /// `paper_lengths`, and the scenario's `sigma`), then the overrides as written (a length
     /// set by hand is that many metres, whatever the named value).
     pub fn config_for(&self, prep: &Prepared) -> Result<Named> {
-        let mut cfg = prep.config(self.named.cfg);
-        for (k, v) in &self.overrides {
-            apply(&mut cfg, k, v)?;
-        }
+        let cfg = self.overridden(prep.config(self.named.cfg))?;
         cfg.validate()
             .map_err(|e| anyhow!("{} on {}: {e}", self.name, prep.scenario.name))?;
         Ok(Named {
             metric: self.named.metric,
             cfg,
         })
+    }
+
+    /// Changes the named configuration (a command's flags: before the overrides, so an
+    /// override of the same value wins) and recomputes [`Variant::cfg`] from it.
+    pub fn edit_named(&mut self, edit: impl FnOnce(&mut Config)) -> Result<()> {
+        edit(&mut self.named.cfg);
+        self.cfg.cfg = self.overridden(self.named.cfg)?;
+        Ok(())
+    }
+
+    /// `cfg` with the overrides applied, in the order written.
+    fn overridden(&self, mut cfg: Config) -> Result<Config> {
+        for (k, v) in &self.overrides {
+            apply(&mut cfg, k, v).with_context(|| format!("override {k}={v}"))?;
+        }
+        Ok(cfg)
     }
 }
 
@@ -151,20 +164,19 @@ pub fn parse_variants(spec: &str) -> Result<Vec<Variant>> {
         }
         let label = item.trim().split_once('@').map(|x| x.1);
         for named in named(word)? {
-            let mut cfg = named;
-            for (k, v) in &overrides {
-                apply(&mut cfg.cfg, k, v).with_context(|| format!("override {k}={v}"))?;
-            }
-            cfg.cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
-            out.push(Variant {
-                name: match label {
-                    Some(l) => format!("{}@{l}", cfg.name()),
-                    None => cfg.name().to_string(),
-                },
-                cfg,
+            let mut v = Variant {
+                name: String::new(),
+                cfg: named,
                 named,
                 overrides: overrides.clone(),
-            });
+            };
+            v.edit_named(|_| {})?;
+            v.cfg.cfg.validate().map_err(|e| anyhow!("{item}: {e}"))?;
+            v.name = match label {
+                Some(l) => format!("{}@{l}", v.cfg.name()),
+                None => v.cfg.name().to_string(),
+            };
+            out.push(v);
         }
     }
     Ok(out)

@@ -90,34 +90,35 @@ pub struct ExperimentArgs {
 }
 
 /// The planners as the runs use them (the switches applied).
-fn planners_of(args: &ExperimentArgs) -> Vec<Variant> {
+fn planners_of(args: &ExperimentArgs) -> Result<Vec<Variant>> {
     args.planners
         .iter()
         .map(|v| {
             let mut v = v.clone();
             // On the named configuration, before its lengths are fitted and its overrides
             // applied (an override of the same value wins).
-            let c = &mut v.named.cfg;
-            if args.faithful {
-                c.rewiring.mode = RewireMode::Faithful;
-            }
-            if let Some(t) = args.t_exp {
-                c.budget.t_exp = t;
-            }
-            c.as_printed = args.as_printed;
-            c.as_printed.meet_all_pairs |= args.meet_all_pairs;
-            if args.pace == crate::results::Pace::Paper {
-                paper_pace(c);
-            }
-            v
+            v.edit_named(|c| {
+                if args.faithful {
+                    c.rewiring.mode = RewireMode::Faithful;
+                }
+                if let Some(t) = args.t_exp {
+                    c.budget.t_exp = t;
+                }
+                c.as_printed = args.as_printed;
+                c.as_printed.meet_all_pairs |= args.meet_all_pairs;
+                if args.pace == crate::results::Pace::Paper {
+                    paper_pace(c);
+                }
+            })?;
+            Ok(v)
         })
         .collect()
 }
 
 /// The settings a results folder records for these arguments.
-pub fn settings(args: &ExperimentArgs) -> Settings {
+pub fn settings(args: &ExperimentArgs) -> Result<Settings> {
     let t = &args.table;
-    Settings {
+    Ok(Settings {
         scenarios: args.scenarios.iter().map(ScenarioId::of).collect(),
         planners: args.planners.iter().map(|v| v.name.clone()).collect(),
         repeats: args.repeats,
@@ -137,17 +138,11 @@ pub fn settings(args: &ExperimentArgs) -> Settings {
             "{:?} {:?} coarsen {} max_bytes {}",
             t.kind, t.layout, t.coarsen, t.max_bytes
         ),
-        configs: planners_of(args)
+        configs: planners_of(args)?
             .iter()
-            .map(|v| {
-                let mut n = v.named;
-                for (k, x) in &v.overrides {
-                    let _ = crate::sim::planners::apply(&mut n.cfg, k, x);
-                }
-                crate::results::config_record(&n.cfg)
-            })
+            .map(|v| crate::results::config_record(&v.cfg.cfg))
             .collect(),
-    }
+    })
 }
 
 /// Runs one planner on one scenario with one seed and returns its rows.
@@ -177,9 +172,8 @@ pub fn one_run(
         }
     };
     // Named -> fitted to the map -> the overrides.
-    let fitted = planner.config_for(prep)?;
-    let cfg = fitted;
-    let (runs, final_nodes) = with_planner(prep, fitted, seed, |p| {
+    let cfg = planner.config_for(prep)?;
+    let (runs, final_nodes) = with_planner(prep, cfg, seed, |p| {
         let runs = match args.clock {
             ClockKind::Wall => {
                 let clock = WallClock::new();
@@ -216,7 +210,7 @@ pub fn one_run(
         Ok((runs, p.tree().len()))
     })?;
     let anytime = if args.anytime_ms > 0 {
-        let mut c = fitted;
+        let mut c = cfg;
         c.cfg.budget.t_exp = Duration::from_millis(args.anytime_ms);
         with_planner(prep, c, seed, |p| {
             p.set_goal(prep.scenario.goals[0])
@@ -341,10 +335,10 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     if args.pace == crate::results::Pace::Paper && args.clock != ClockKind::Virtual {
         bail!("--pace paper needs --clock virtual (each call is made to last its full t_exp)");
     }
-    let planners = planners_of(args);
+    let planners = planners_of(args)?;
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("{}", out.display()))?;
-    let settings = settings(args);
+    let settings = settings(args)?;
     let old = crate::results::Manifest::read(out)?;
     let has_rows = out.join(crate::results::RUNS).exists();
     match (args.existing, &old) {
