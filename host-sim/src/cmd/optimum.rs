@@ -11,12 +11,15 @@ use clap::Args;
 pub struct Cmd {
     #[command(flatten)]
     scenarios: crate::args::ScenarioArgs,
+    /// Leave the grid planners (A*, Theta*) out: the exact optimum alone.
+    #[arg(long)]
+    no_grid: bool,
 }
 
 /// Runs the command.
 pub fn main(cmd: Cmd) -> Result<()> {
-    let Cmd { scenarios } = cmd;
+    let Cmd { scenarios, no_grid } = cmd;
     let sc = scenarios.one(None)?;
-    host_sim::metric::optimum::report(&sc);
+    host_sim::metric::optimum::report(&sc, !no_grid);
     Ok(())
 }

@@ -24,18 +24,20 @@
 //!   only round it); none of them head on into its cell (no taut way on from there).
 //! - **A segment is walked crossing by crossing** and dropped at its first blocked piece, the
 //!   core's span test answering for long free ones.
+//! - **Long edges are tested lazily**: an edge free over its first pieces that beats every
+//!   edge into its corner so far waits on the open list untested, and most are outdone before
+//!   they come off it (`Corners::search_path`).
 //!
 //! The figures are those of the plain search (every corner from every corner, the straight
 //! line as heuristic) to the bit (`the_prunings_change_no_figure`: 400 random maps;
-//! `..._on_a_maze`: 1-cell corridors with loops). `host-sim optimum` prints each leg's figure
-//! and CPU time: nav2's warehouse (1,006 x 1,674 cells of 0.03 m) 0.06-0.16 s a leg
-//! (0.04-1.6 s before), a 1,024-cell map of 900 blocks 0.03-0.07 s, mazes of 1-cell corridors
-//! of 129, 511, 2,047 and 4,095 cells 0.004 s, 0.03-0.05 s (25-40 s before), 0.5-0.9 s and
-//! 1.9-3.1 s (2.9 million corners, legs of 216-690 km), a 4,096-cell building drawn like a
-//! SLAM map at 0.05 m (38,456 corners) 0.9-2.6 s for legs across it (26-110 s before; the
-//! lattice's Dijkstra over 16.8 million points is about 0.7-0.9 s of it, the machine's noise
-//! the spread), 0.17-0.47 s for legs of 19-83 m in it (the Dijkstra stops past the start):
-//! `scripts/gen-maps.py --big`.
+//! `..._on_a_maze`: 1-cell corridors with loops). `host-sim optimum --no-grid` prints each
+//! leg's figure and CPU time (medians of 3-5 runs, `scripts/gen-maps.py --big` for the
+//! generated maps): nav2's warehouse (1,006 x 1,674 cells of 0.03 m) 0.03-0.06 s a leg, a
+//! 1,024-cell map of 900 blocks 0.01-0.03 s, mazes of 1-cell corridors of 511, 2,047 and
+//! 4,095 cells 0.02-0.03 s, 0.23-0.52 s and 1.0-1.9 s (2.9 million corners, legs of 216-690
+//! km), a 4,096-cell building drawn like a SLAM map at 0.05 m (38,456 corners) 0.46-0.96 s
+//! for legs across it (about 0.3-0.45 s of it the lattice's Dijkstra over 16.8 million
+//! points).
 //!
 //! Checked against the exact optima of the 24 reference legs in
 //! `../shared/anchors/reference-figures.md` (test `optima_match_the_reference_figures`).
@@ -46,7 +48,6 @@ use std::collections::BinaryHeap;
 use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
 
-use crate::metric::grid_planners::Open;
 use crate::scenario::Scenario;
 
 /// The lattice's unit step, and its diagonal rounded down (`lattice_to`).
@@ -65,6 +66,33 @@ const FOV_MIN: usize = 256;
 const FOV_BUDGET: usize = 64;
 /// ... and never before this many cells.
 const FOV_CELLS: usize = 1 << 21;
+
+/// An edge on the search's open list: its key (label plus heuristic), its label and its index;
+/// the least key first, then the least label (two labels a bit apart may make one key), then
+/// the first pushed.
+struct OpenEdge(f64, f64, usize);
+
+impl PartialEq for OpenEdge {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for OpenEdge {}
+
+impl PartialOrd for OpenEdge {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for OpenEdge {
+    fn cmp(&self, other: &Self) -> Ordering {
+        (other.0.total_cmp(&self.0))
+            .then(other.1.total_cmp(&self.1))
+            .then(other.2.cmp(&self.2))
+    }
+}
 
 /// The visibility-graph nodes of one map (convex obstacle corners) and its cells.
 pub struct Corners {
@@ -185,6 +213,18 @@ impl Corners {
     /// crossings are walked in order and the walk stops at the first blocked piece (a segment
     /// into a wall costs a few cells, not its length).
     fn sees(&self, a: (f64, f64), b: (f64, f64)) -> bool {
+        self.walk(a, b, false) == Some(true)
+    }
+
+    /// [`Self::sees`] decided within the segment's first pieces: `None` when they are free and
+    /// more of the segment is left (the rest of the test is the costly part of a long free
+    /// segment; a blocked one ends in its first pieces in most cases).
+    fn sees_at_first(&self, a: (f64, f64), b: (f64, f64)) -> Option<bool> {
+        self.walk(a, b, true)
+    }
+
+    /// The walk of [`Self::sees`]; with `first_only`, `None` after the first pieces.
+    fn walk(&self, a: (f64, f64), b: (f64, f64), first_only: bool) -> Option<bool> {
         let (dx, dy) = (b.0 - a.0, b.1 - a.1);
         // After the first pieces (most blocked segments end there, in a maze), the core's test:
         // it refuses a segment within a thousandth of a cell of an occupied cell (more than
@@ -263,19 +303,24 @@ impl Corners {
                         self.occ(i, j),
                     );
                     if (nw && se) || (ne && sw) {
-                        return false;
+                        return Some(false);
                     }
                 }
             }
             if t - prev >= 1e-12 && self.piece_blocked(a, (dx, dy), 0.5 * (prev + t)) {
-                return false;
+                return Some(false);
             }
             pieces += 1;
-            if pieces == 8 && t < 1.0 && self.core_free(a, b) {
-                return true;
+            if pieces == 8 && t < 1.0 {
+                if first_only {
+                    return None;
+                }
+                if self.core_free(a, b) {
+                    return Some(true);
+                }
             }
             if t >= 1.0 {
-                return true;
+                return Some(true);
             }
             if tx == t {
                 ax.advance();
@@ -397,16 +442,30 @@ impl Corners {
         let mut seen = vec![0u32; n];
         let mut stamp = 0u32;
         let mut view: Vec<usize> = Vec::new();
+        // Long edges are tested lazily. The open list holds edges (the node, where from, its
+        // label, whether tested). An edge is tested at once as far as its first pieces (where a
+        // blocked edge ends in most cases, in a maze); one that is free there and goes on is
+        // pushed untested when it beats every edge pushed into its node so far, else tested
+        // whole at once, and an untested edge is tested when it comes off the list. The first
+        // edge of a node that passes closes it: the least free edge into it from a closed node,
+        // with the eager search's label (the heuristic is consistent), after a fraction of the
+        // long tests in a building, where most long edges are outdone before they come off.
+        // Edges into the goal are tested whole at once (the goal's label bounds the search).
+        //
         let mut best = vec![f64::INFINITY; n + 2];
+        let mut least = vec![f64::INFINITY; n + 2];
         let mut parent = vec![usize::MAX; n + 2];
         let mut closed = vec![false; n + 2];
+        let mut edges: Vec<(usize, usize, f64, bool)> = vec![(n + 1, usize::MAX, 0.0, true)];
         let mut open = BinaryHeap::new();
-        best[n + 1] = 0.0;
-        open.push(Open(dist(s, g), n + 1));
-        while let Some(Open(_, u)) = open.pop() {
-            if closed[u] {
+        open.push(OpenEdge(dist(s, g), 0.0, 0));
+        while let Some(OpenEdge(_, _, e)) = open.pop() {
+            let (u, from, c, tested) = edges[e];
+            if closed[u] || (!tested && !self.sees(pos(from), pos(u))) {
                 continue;
             }
+            best[u] = c;
+            parent[u] = from;
             if u == n {
                 let mut points = vec![g];
                 let mut v = n;
@@ -478,17 +537,30 @@ impl Corners {
                 let pv = pos(v);
                 let c = best[u] + dist(pu, pv);
                 let d = (pv.0 - pu.0, pv.1 - pu.1);
-                // Only edges that improve and can still beat the goal's label; not into a
-                // corner head on (its cell straight ahead: no taut way on from there).
+                // Only edges that can still beat the goal's label; not into a corner head on
+                // (its cell straight ahead: no taut way on from there).
                 if c < best[v]
                     && c + hv(v) < best[n]
                     && (v == n || d.0 * quad[v].0 <= 0.0 || d.1 * quad[v].1 <= 0.0)
                     && back.is_none_or(|(a, w)| taut(a, d, w))
-                    && self.sees(pu, pv)
                 {
-                    best[v] = c;
-                    parent[v] = u;
-                    open.push(Open(c + hv(v), v));
+                    let tested = match self.sees_at_first(pu, pv) {
+                        Some(false) => continue,
+                        Some(true) => true,
+                        None if v == n || c >= least[v] => {
+                            if !self.sees(pu, pv) {
+                                continue;
+                            }
+                            true
+                        }
+                        None => false,
+                    };
+                    if tested {
+                        best[v] = c;
+                    }
+                    least[v] = least[v].min(c);
+                    open.push(OpenEdge(c + hv(v), c, edges.len()));
+                    edges.push((v, u, c, tested));
                 }
             }
         }
@@ -672,8 +744,11 @@ impl Corners {
         let w = self.cols + 1;
         let at = |i: i64, j: i64| (j * w + i) as usize;
         let mut dist = vec![u32::MAX; (w * (self.rows + 1)) as usize];
-        let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); DIAG_DOWN as usize + 1];
-        let nb = buckets.len();
+        // One bucket per distance modulo a power of two above the longest step: a step never
+        // lands in the bucket being settled.
+        const NB: usize = 128;
+        const _: () = assert!(DIAG_DOWN as usize <= NB - 1 && LATTICE_UNIT as usize <= NB - 1);
+        let mut buckets: [Vec<u32>; NB] = std::array::from_fn(|_| Vec::new());
         let mut queued = 0usize;
         // The corners of the free cells whose closed square holds a point.
         let cell_corners = |p: (f64, f64)| {
@@ -714,10 +789,12 @@ impl Corners {
             start_left.last().copied().unwrap_or(0),
         );
         let mut stop: Option<u32> = None;
-        let step = |k: usize| -> isize {
-            let w = w as isize;
-            [1, -1, w, -w, w + 1, -w - 1, -w + 1, w - 1][k]
-        };
+        let wi = w as isize;
+        let offset: [isize; 8] = [1, -1, wi, -wi, wi + 1, -wi - 1, -wi + 1, wi - 1];
+        let unit = LATTICE_UNIT as u32;
+        let length: [u32; 8] = [
+            unit, unit, unit, unit, DIAG_DOWN, DIAG_DOWN, DIAG_DOWN, DIAG_DOWN,
+        ];
         let mut d = 0u32;
         while queued > 0 {
             if let Some(cap) = stop.filter(|&cap| d > cap) {
@@ -726,9 +803,11 @@ impl Corners {
                 }
                 return dist;
             }
-            let b = d as usize % nb;
-            while let Some(u) = buckets[b].pop() {
-                queued -= 1;
+            // The bucket is taken out while it is settled (its steps land in others).
+            let b = d as usize & (NB - 1);
+            let settling = std::mem::take(&mut buckets[b]);
+            queued -= settling.len();
+            for &u in &settling {
                 let u = u as usize;
                 if dist[u] != d {
                     continue;
@@ -744,19 +823,18 @@ impl Corners {
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let v = (u as isize + step(k)) as usize;
-                    let c = d + if k < 4 {
-                        LATTICE_UNIT as u32
-                    } else {
-                        DIAG_DOWN
-                    };
+                    let v = u.wrapping_add_signed(offset[k]);
+                    let c = d + length[k];
                     if c < dist[v] {
                         dist[v] = c;
-                        buckets[c as usize % nb].push(v as u32);
+                        buckets[c as usize & (NB - 1)].push(v as u32);
                         queued += 1;
                     }
                 }
             }
+            let mut settling = settling;
+            settling.clear();
+            buckets[b] = settling;
             d += 1;
         }
         dist
@@ -766,6 +844,7 @@ impl Corners {
     /// heuristic; the same answers): the tests compare the two.
     #[cfg(test)]
     fn shortest_unbounded(&self, a: Point, b: Point) -> Option<f64> {
+        use crate::metric::grid_planners::Open;
         let s = (a.x as f64 / self.cell, a.y as f64 / self.cell);
         let g = (b.x as f64 / self.cell, b.y as f64 / self.cell);
         let dist =
@@ -915,8 +994,8 @@ pub fn leg_optima(s: &Scenario) -> Vec<Option<f64>> {
 
 /// `host-sim optimum`: each leg's exact optimum and the CPU time it took, uncached, with a
 /// line per leg as it ends; beside it A* on the 8-connected grid and Theta* on the same cells
-/// ([`crate::metric::grid_planners`]), their lengths / optimum and CPU times.
-pub fn report(s: &Scenario) {
+/// ([`crate::metric::grid_planners`]), their lengths / optimum and CPU times (with `grid`).
+pub fn report(s: &Scenario, grid_planners: bool) {
     let t0 = cpu_time::ThreadTime::now().as_duration().as_secs_f64();
     let grid = s.reach_grid();
     let corners = Corners::of(&grid);
@@ -932,10 +1011,14 @@ pub fn report(s: &Scenario) {
     let cpu = || cpu_time::ThreadTime::now().as_duration().as_secs_f64();
     type Planner =
         fn(&OccupancyGrid<'_>, Point, Point) -> Option<crate::metric::grid_planners::GridPath>;
-    let planners: [(&str, Planner); 2] = [
-        ("A* (8-connected)", crate::metric::grid_planners::astar8),
-        ("Theta*", crate::metric::grid_planners::theta_star),
-    ];
+    let planners: &[(&str, Planner)] = if grid_planners {
+        &[
+            ("A* (8-connected)", crate::metric::grid_planners::astar8),
+            ("Theta*", crate::metric::grid_planners::theta_star),
+        ]
+    } else {
+        &[]
+    };
     for (k, (a, b)) in leg_starts(s)
         .into_iter()
         .zip(s.goals.iter().copied())
@@ -950,7 +1033,7 @@ pub fn report(s: &Scenario) {
             cpu() - t
         );
         // The grid planners on the same cells (module `grid_planners`).
-        for (name, plan) in planners {
+        for &(name, plan) in planners {
             let t = cpu();
             let p = plan(&grid, a, b);
             let took = cpu() - t;
