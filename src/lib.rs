@@ -7,12 +7,58 @@
 //! The crate is `#![no_std]`, never allocates and contains no `unsafe`. All storage has a
 //! capacity fixed at compile time (const generics), every loop is bounded, and time is whatever
 //! [`clock::Clock`] the caller passes, so the same code runs in microcontroller firmware and in
-//! the desktop simulator (`host-sim`).
+//! the desktop simulator (`host-sim`, in the repository).
 //!
-//! ## Architecture
+//! ## Quick start
 //!
-//! The modules in the order data flows through a `plan` call; the file list reads the same way
-//! (modules in `code` are private: the planner's own work, no API).
+//! A [`Planner`] borrows its [`Storage`] (two trees) and owns a [`Map`] (a borrowed
+//! [`OccupancyGrid`] plus dynamic obstacles), a [`Metric`], a random generator and a
+//! [`Config`]. Call [`Planner::plan`] once per control period with the agent's position: it
+//! works for at most `t_exp` of the clock you pass and returns a [`Progress`] whose waypoint is
+//! always reachable from the agent over a free segment.
+//!
+//! ```
+//! use bi_am_rrt::builtin;
+//! use bi_am_rrt::clock::FakeClock;
+//! use bi_am_rrt::{Config, Euclidean, Map, Planner, Status, Storage};
+//! use rand_core::SeedableRng;
+//! use rand_xorshift::XorShiftRng;
+//!
+//! // Two trees of 1,024 nodes with 128 index buckets each: 46,728 bytes on a Cortex-M
+//! // (`Storage::BYTES`); a firmware keeps it in a `static`.
+//! let mut storage: Box<Storage<1024, 128>> = Box::default();
+//! let scenario = &builtin::OPEN; // a 40 m map kept in flash
+//! let map: Map<'_, 4> = Map::new(scenario.grid); // room for 4 dynamic obstacles
+//! // The tuned Bi-AM-RRT* with lengths fitted to the map (`Config::paper()`: the paper's).
+//! let mut cfg = Config::default().for_grid(&scenario.grid);
+//! cfg.budget.t_exp = core::time::Duration::from_millis(10); // the time of one call
+//! let rng = XorShiftRng::seed_from_u64(7);
+//! let mut planner = Planner::new(&mut storage, map, Euclidean, rng, cfg, scenario.start).unwrap();
+//! planner.set_goal(scenario.goals[0]).unwrap();
+//!
+//! // A virtual clock (time advances with the work done): the same run on any machine. A
+//! // firmware passes a real one (`cortex::SysTickClock`, feature `cortex-m`).
+//! let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+//! let mut agent = scenario.start;
+//! for _ in 0..400 {
+//!     let progress = planner.plan(&clock, agent).unwrap();
+//!     agent = agent.step_towards(progress.waypoint, 0.7); // the robot drives
+//!     if progress.status == Status::Arrived {
+//!         break;
+//!     }
+//! }
+//! assert_eq!(agent, scenario.goals[0]);
+//! ```
+//!
+//! Positions are metres in the grid's frame ([`OccupancyGrid`]: from the corner of cell
+//! `(0, 0)`, `x` along columns, `y` along rows). The paper's diffusion metric is a table baked
+//! on the host (`host-sim bake`; `host-sim export` writes a firmware's map, table and scenario
+//! as flash data) and read in place by [`DiffusionTable`]; [`Euclidean`] needs none.
+//!
+//! ## A tour of the modules
+//!
+//! In the order data flows through a `plan` call; the file list reads the same way (modules
+//! in `code` are private: the planner's own work, no API).
 //!
 //! 1. What the caller gives:
 //!    - [`geometry`]: points, segments, uniform sampling in a disc and in the informed ellipse.
@@ -49,47 +95,6 @@
 //!    [`builtin`], the built-in scenarios in flash; [`error`], the small error enums; `slots`,
 //!    panic-free array access.
 //!
-//! ## Example
-//!
-//! Build a map, grow a tiny tree by hand and ask the spatial index for a neighbour:
-//!
-//! ```
-//! use bi_am_rrt::geometry::Point;
-//! use bi_am_rrt::index::SpatialIndex;
-//! use bi_am_rrt::map::{pack_grid, Circle, Map, OccupancyGrid};
-//! use bi_am_rrt::tree::Tree;
-//!
-//! // A 10 m x 10 m map of 1 m cells with a wall at column 5, rows 0..8.
-//! let mut bits = [0u8; OccupancyGrid::bytes_needed(10, 10)];
-//! pack_grid(&mut bits, 10, 10, |col, row| col == 5 && row < 8).unwrap();
-//! let mut map: Map<'_, 4> = Map::new(OccupancyGrid::new(&bits, 10, 10, 1.0).unwrap());
-//!
-//! let (start, goal) = (Point::new(1.5, 1.5), Point::new(8.5, 1.5));
-//! assert!(!map.free_path(start, goal)); // the wall is in the way
-//! let around = Point::new(5.5, 9.5);
-//! assert!(map.free_path(start, around) && map.free_path(around, goal));
-//!
-//! let mut tree: Tree<64> = Tree::new();
-//! let root = tree.reset(start);
-//! let mid = tree.add(around, root, false).unwrap();
-//! let end = tree.add(goal, mid, false).unwrap();
-//! let mut path = [Point::ZERO; 8];
-//! let n = tree.path_points(end, &mut path).unwrap();
-//! assert_eq!(&path[..n], &[start, around, goal]);
-//!
-//! let mut index: SpatialIndex<64, 16> = SpatialIndex::with_bounds(10.0, 10.0, 2.5).unwrap();
-//! for id in tree.ids() {
-//!     index.insert(id, tree.position(id).unwrap()).unwrap();
-//! }
-//! let (nearest, _) = index.nearest(Point::new(7.0, 3.0), tree.positions()).unwrap();
-//! assert_eq!(nearest, end);
-//!
-//! // A dynamic obstacle appears on the second edge: its cost becomes blocked.
-//! map.obstacles_mut().add(Circle::new(Point::new(7.0, 5.5), 0.5)).unwrap();
-//! tree.reflag_edges(|a, b| map.obstacles().blocks_segment(a, b));
-//! assert!(tree.cost(end).unwrap().blocked);
-//! ```
-//!
 //! ## Features
 //!
 //! - `defmt`: `defmt::Format` for the public types (for firmware logging).
@@ -100,17 +105,27 @@
 //! - `rand-core-06`: `Rng06`, a `rand_core` 0.6 generator (a HAL's hardware RNG) as the
 //!   planner's `rand_core` 0.10 `Rng`.
 //! - `clearance`: the clearance preference ([`clearance`], `Config::clearance_weight`): paths
-//!   keep off walls where the space allows. Off by default (3.2 KB of flash when on).
+//!   keep off walls where the space allows. Off by default (a firmware without it carries
+//!   none of its code).
+//! - `hw-sqrt`: the target's square-root instruction (`vsqrt.f32` on a Cortex-M4F) instead of
+//!   `libm`'s routine, the same bits (IEEE 754 rounds both correctly); needs nightly Rust.
+//! - `firmware-example`: builds the repository's Cortex-M firmware examples (thumb targets
+//!   only); not for use as a dependency.
+//!
+//! ## Memory
+//!
+//! RAM is the [`Storage`] (42 bytes a node and 4 a bucket for both trees, plus a fixed
+//! 3.2 KB: [`Storage::BYTES`]), the [`Planner`] itself and the call's stack (a few KB; the
+//! repository's README has the firmware examples' measured RAM and flash). The map and the
+//! diffusion table are borrowed and can sit in flash.
 //!
 //! ## Randomness on the chip
 //!
-//! The planner takes any `rand_core::Rng` (`rand_core` 0.10, the trait behind `TryRng` with
-//! an infallible error). For repeatable runs use a seeded software generator such as
-//! `rand_xorshift::XorShiftRng::seed_from_u64`, as the examples do. To draw from a hardware
-//! generator, wrap the HAL's driver in a type implementing `rand_core::TryRng` (most HALs
-//! implement the older `rand_core` 0.6 `RngCore`; its `next_u32` maps straight onto
-//! `try_next_u32`), or, better for speed and repeatability, seed a software generator once
-//! from it: `XorShiftRng::from_seed(hw_bytes)`.
+//! The planner takes any `rand_core::Rng` (`rand_core` 0.10). For repeatable runs use a
+//! seeded software generator such as `rand_xorshift::XorShiftRng::seed_from_u64`, as the
+//! examples do. A HAL's hardware generator (most implement `rand_core` 0.6's `RngCore`) plugs
+//! in through `Rng06` (feature `rand-core-06`); or, better for speed and repeatability, seed a
+//! software generator once from it.
 
 #![no_std]
 #![forbid(unsafe_code)]

@@ -367,6 +367,30 @@ fn regression_storage_fits_4096_nodes_in_96_kib() {
     );
 }
 
+/// `Storage::BYTES` (the formula its docs give: 42 bytes a node, 4 a bucket, a fixed part) is
+/// its size: exactly when `N` is a multiple of 8 and `B` of 4, within 16 bytes otherwise. The
+/// crate checks four sizes as it compiles for any target (thumbv7em in CI); this checks more.
+#[test]
+fn storage_bytes_follow_the_formula() {
+    use core::mem::size_of;
+    macro_rules! check {
+        ($($n:literal, $b:literal);*) => {$(
+            let (actual, formula) = (size_of::<Storage<$n, $b>>(), Storage::<$n, $b>::BYTES);
+            if $n % 8 == 0 && $b % 4 == 0 {
+                assert_eq!(actual, formula, "Storage<{}, {}>", $n, $b);
+            } else {
+                assert!(actual.abs_diff(formula) <= 16, "Storage<{}, {}>: {actual} vs {formula}", $n, $b);
+            }
+        )*};
+    }
+    check!(8, 4; 16, 8; 128, 16; 256, 32; 512, 64; 1000, 128; 4096, 512; 8192, 256;
+        61, 10; 62, 17; 67, 19; 101, 10; 1023, 255; 2047, 33);
+    assert_eq!(
+        Storage::<2048, 256>::BYTES,
+        87_040 + Storage::<1, 1>::FIXED_BYTES
+    );
+}
+
 /// RRT-Connect's greedy step (the tuned profile, here with the paper's parameters): across
 /// open space the reverse tree walks straight to the forward tree's first node and the goal
 /// joins in the first step, where the paper's trees, which meet only within `sigma`, need

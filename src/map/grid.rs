@@ -11,6 +11,12 @@ use crate::slots::{cell_index, sat_u32, to_u16};
 pub const CONTACT_MARGIN: f32 = 1.0e-3;
 
 /// A read-only occupancy grid borrowing its bit-packed cells.
+///
+/// **Frame.** Positions are in metres from the corner of cell `(0, 0)`: `x` along the columns,
+/// `y` along the rows, so `(x, y)` lies in cell `(floor(x / cell), floor(y / cell))` and the map
+/// spans `[0, width * cell] x [0, height * cell]`. Row 0 is the first row of the bytes: for a
+/// map drawn as an image, its top row, so `y` grows downwards (`host-sim` converts a ROS map's
+/// frame, `y` up from its `origin`, to this one). Bit layout: the module documentation.
 #[derive(Clone, Copy, Debug)]
 pub struct OccupancyGrid<'a> {
     pub(super) bits: &'a [u8],

@@ -114,6 +114,10 @@ struct Body<'a> {
 
 /// The planner's world: a borrowed static grid, optionally a live [`Overlay`] of edited cells,
 /// a robot body (the cells inflated for its radius), and up to `K` dynamic circles.
+///
+/// Every position (the agent, goals, obstacles' centres, waypoints) is in the grid's frame:
+/// metres from the corner of cell `(0, 0)`, `x` along columns, `y` along rows
+/// ([`OccupancyGrid`]'s frame).
 #[derive(Debug)]
 pub struct Map<'a, const K: usize> {
     grid: OccupancyGrid<'a>,
