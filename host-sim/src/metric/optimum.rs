@@ -747,7 +747,7 @@ impl Corners {
         // One bucket per distance modulo a power of two above the longest step: a step never
         // lands in the bucket being settled.
         const NB: usize = 128;
-        const _: () = assert!(DIAG_DOWN as usize <= NB - 1 && LATTICE_UNIT as usize <= NB - 1);
+        const _: () = assert!((DIAG_DOWN as usize) < NB && (LATTICE_UNIT as usize) < NB);
         let mut buckets: [Vec<u32>; NB] = std::array::from_fn(|_| Vec::new());
         let mut queued = 0usize;
         // The corners of the free cells whose closed square holds a point.
