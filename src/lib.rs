@@ -182,7 +182,8 @@ pub use planner::{PathInfo, Planner, Progress, Stats, Status, Storage, Wait};
 #[cfg(feature = "rand-core-06")]
 pub use sample::Rng06;
 
-/// The README's example is compiled and run by `cargo test --doc`.
+/// The crate's README (its page on crates.io) is compiled and run by `cargo test --doc`; the
+/// repository's README by the `doctests` crate of the workspace.
 #[cfg(doctest)]
-#[doc = include_str!("../README.md")]
+#[doc = include_str!("../README-crate.md")]
 struct ReadmeDoctests;
