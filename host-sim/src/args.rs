@@ -145,9 +145,7 @@ pub(crate) fn load_map(spec: &str, resolution: Option<f32>) -> Result<scenario::
         None => scenario::load_png(&PathBuf::from(spec))?,
     };
     if let Some(r) = resolution {
-        if !(r.is_finite() && r > 0.0) {
-            bail!("--resolution {r}: must be a positive number of metres");
-        }
+        scenario::check_resolution("--resolution", r)?;
         grid.cell_bits = r.to_bits();
     }
     Ok(grid)

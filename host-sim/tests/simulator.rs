@@ -131,7 +131,18 @@ fn the_paper_pace_makes_every_call_last_its_budget() {
         );
         // 20 expansions a call at most: the tree grows by at most 20 nodes a call.
         assert!(r.nodes_at_call_end.unwrap() <= 1 + 20 * r.calls as usize);
+        // Issue 44: the agent does not move in a search: no path, an empty field (not 0 m).
+        assert_eq!(r.path_length_m, None);
     }
+    let text = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "path_length_m").unwrap();
+    for line in text.lines().skip(1) {
+        assert_eq!(line.split(',').nth(col), Some(""), "{line}");
+    }
+    // The summary the command prints counts goals found.
+    let summary = host_sim::results::summarise(&rows);
+    assert!(summary.iter().all(|s| s.found == s.runs && s.reached == 0));
     // A search-only folder's report counts goals found (it used to read "reached 0/2").
     let md = out.join("report.md");
     host_sim::study::report::report(&out, &md, "report", None).unwrap();
@@ -254,7 +265,7 @@ fn seed_blocks_merge_into_one_matrix() {
     experiment::run(&args(&b, 4, 2)).unwrap();
     experiment::run(&args(&c, 5, 1)).unwrap();
     let merged = dir.path().join("merged");
-    let m = host_sim::results::merge(&[b.clone(), a.clone()], &merged).unwrap();
+    let m = host_sim::results::merge(&[b.clone(), a.clone()], &merged, false).unwrap();
     assert_eq!((m.runs, m.missing), (6, 0));
     assert_eq!(
         rows_without_wall_time(&merged),
@@ -280,8 +291,8 @@ fn seed_blocks_merge_into_one_matrix() {
     );
     assert_eq!(s.configs[0].len(), bi_am_rrt::config::PARAMS.len());
     // A gap (seeds 3 and 5) and an overlap (4-5 and 5) are refused.
-    assert!(host_sim::results::merge(&[a, c.clone()], &dir.path().join("gap")).is_err());
-    assert!(host_sim::results::merge(&[b, c], &dir.path().join("overlap")).is_err());
+    assert!(host_sim::results::merge(&[a, c.clone()], &dir.path().join("gap"), false).is_err());
+    assert!(host_sim::results::merge(&[b, c], &dir.path().join("overlap"), false).is_err());
 }
 
 /// Issue 9: an interrupted matrix keeps its rows and `--resume` does the rest; `--shard K/N`
@@ -327,20 +338,42 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
         assert_eq!(o.runs, if k < 2 { 3 } else { 2 });
     }
     let merged = dir.path().join("merged");
-    let m = host_sim::results::merge(&shards, &merged).unwrap();
+    let m = host_sim::results::merge(&shards, &merged, false).unwrap();
     assert_eq!((m.runs, m.missing), (8, 0));
     assert_eq!(rows_without_wall_time(&merged), reference);
+    // Issue 44: a folder holding results is not overwritten without --overwrite, an input is
+    // never the output, and a folder being written is locked against a second writer.
+    let e = host_sim::results::merge(&shards, &merged, false).unwrap_err();
+    assert!(format!("{e:#}").contains("--overwrite"), "{e:#}");
+    let e = host_sim::results::merge(&shards, &shards[0], true).unwrap_err();
+    assert!(format!("{e:#}").contains("one of the inputs"), "{e:#}");
+    assert_eq!(
+        rows_without_wall_time(&merged),
+        reference,
+        "refusals change nothing"
+    );
+    {
+        let _held = host_sim::results::FolderLock::take(&whole).unwrap();
+        let e = experiment::run(&args(&whole, None, Existing::Resume)).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("being written by another run"),
+            "{e:#}"
+        );
+        let e = host_sim::results::merge(&shards, &whole, true).unwrap_err();
+        assert!(format!("{e:#}").contains("being written"), "{e:#}");
+    }
     // Two shards only: merged, with the third's runs reported missing.
-    let m = host_sim::results::merge(&shards[..2], &dir.path().join("partial")).unwrap();
+    let m = host_sim::results::merge(&shards[..2], &dir.path().join("partial"), false).unwrap();
     assert_eq!((m.runs, m.missing), (6, 2));
     // A run in two inputs, or folders run with other settings, are refused.
-    let e = host_sim::results::merge(&[whole.clone(), shards[0].clone()], &merged).unwrap_err();
+    let e =
+        host_sim::results::merge(&[whole.clone(), shards[0].clone()], &merged, true).unwrap_err();
     assert!(format!("{e:#}").contains("earlier input"), "{e:#}");
     let other = dir.path().join("other");
     let mut a = args(&other, Some("1/3"), Existing::Refuse);
     a.seed = 4;
     experiment::run(&a).unwrap();
-    let e = host_sim::results::merge(&[shards[1].clone(), other], &merged).unwrap_err();
+    let e = host_sim::results::merge(&[shards[1].clone(), other], &merged, true).unwrap_err();
     assert!(format!("{e:#}").contains("seed"), "{e:#}");
 
     // An interruption: the last three runs are gone and the fourth-last is cut mid-line.
@@ -353,6 +386,17 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
     partial.push('\n');
     partial.push_str(&lines[lines.len() - 4][..20]);
     std::fs::write(cut.join("runs.csv"), partial).unwrap();
+    // The report reads the rest, and says what it left out (issue 44).
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["report", "--results"])
+        .arg(&cut)
+        .arg("--out")
+        .arg(dir.path().join("cut-report").join("r.md"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("its last line is cut (20 bytes"), "{err}");
     let e = experiment::run(&args(&cut, Some("1/2"), Existing::Resume)).unwrap_err();
     assert!(format!("{e:#}").contains("shard"), "{e:#}");
     let o = experiment::run(&args(&cut, None, Existing::Resume)).unwrap();
@@ -767,6 +811,82 @@ fn ros_maps_load_with_map_servers_rule() {
     std::fs::write(dir.path().join("bad.toml"), bad).unwrap();
     let e = scenario::load_scenarios(&dir.path().join("bad.toml"), None).unwrap_err();
     assert!(format!("{e:#}").contains("resolution_m"), "{e:#}");
+}
+
+/// Issue 44: an absurd cell size is refused (a YAML's, a scenario's, a flag's); a missing
+/// image names the YAML that names it and the scenario; a huge PGM is refused from its
+/// header, before the file is read (a 2 GiB file here, sparse: `host-sim optimum` on it took
+/// 3.1 s and 2.1 GB before, reading it whole; 0.1 s and 111 MB now).
+#[test]
+fn map_files_are_checked_before_they_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("m.pgm"),
+        b"P5\n4 4\n255\n\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe\xfe",
+    )
+    .unwrap();
+    for r in ["1e-30", "0", "-1", "1e9", ".nan"] {
+        std::fs::write(
+            dir.path().join("r.yaml"),
+            format!("image: m.pgm\nresolution: {r}\norigin: [0, 0, 0]\n"),
+        )
+        .unwrap();
+        let e = scenario::load_ros_yaml(&dir.path().join("r.yaml")).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("a cell size must be"),
+            "{r}: {e:#}"
+        );
+    }
+    std::fs::write(
+        dir.path().join("ok.yaml"),
+        "image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    assert!(scenario::load_ros_yaml(&dir.path().join("ok.yaml")).is_ok());
+    std::fs::write(
+        dir.path().join("tiny.toml"),
+        "[t]\nfile = \"m.pgm.png\"\nresolution_m = 1e-30\nstart = [0, 0]\ngoals = [[0, 0]]\n",
+    )
+    .unwrap();
+    image::GrayImage::from_pixel(4, 4, image::Luma([255]))
+        .save(dir.path().join("m.pgm.png"))
+        .unwrap();
+    let e = scenario::load_scenarios(&dir.path().join("tiny.toml"), None).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("scenario t: resolution_m = 0"),
+        "{e:#}"
+    );
+    // A missing image: the YAML and the scenario are named.
+    std::fs::write(
+        dir.path().join("gone.yaml"),
+        "image: nope.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("gone.toml"),
+        "[lost]\nfile = \"gone.yaml\"\nstart = [0.1, 0.1]\ngoals = [[0.1, 0.1]]\n",
+    )
+    .unwrap();
+    let e = format!(
+        "{:#}",
+        scenario::load_scenarios(&dir.path().join("gone.toml"), None).unwrap_err()
+    );
+    assert!(
+        e.contains("scenario lost") && e.contains("gone.yaml") && e.contains("nope.pgm"),
+        "{e}"
+    );
+    // A 20,000 x 20,000 PGM (400 MB of pixels; 2 GiB on disk, sparse): refused from its header.
+    let mut huge = std::fs::File::create(dir.path().join("huge.pgm")).unwrap();
+    std::io::Write::write_all(&mut huge, b"P5\n20000 20000\n255\n").unwrap();
+    huge.set_len(2 << 30).unwrap();
+    drop(huge);
+    std::fs::write(
+        dir.path().join("huge.yaml"),
+        "image: huge.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    let e = scenario::load_ros_yaml(&dir.path().join("huge.yaml")).unwrap_err();
+    assert!(format!("{e:#}").contains("at most"), "{e:#}");
 }
 
 /// Issue 9: a map of any cell size works end to end: the same maze at 0.5 m cells has exactly

@@ -16,13 +16,20 @@ pub struct Cmd {
     /// Folders to join.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
+    /// Replace the results an existing --out folder holds (without it, such a folder is refused).
+    #[arg(long)]
+    overwrite: bool,
 }
 
 /// Runs the command.
 pub fn main(cmd: Cmd) -> Result<()> {
-    let Cmd { out, inputs } = cmd;
-    let m = host_sim::results::merge(&inputs, &out)?;
-    experiment::print_summary(&m.summary);
+    let Cmd {
+        out,
+        inputs,
+        overwrite,
+    } = cmd;
+    let m = host_sim::results::merge(&inputs, &out, overwrite)?;
+    experiment::print_summary(&m.summary, m.search_only);
     println!(
         "merged {} folders: {} runs{} -> {}",
         inputs.len(),

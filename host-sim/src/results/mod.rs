@@ -318,8 +318,9 @@ pub struct Row {
     pub reached: bool,
     /// Goal set until the goal is in the forward tree, on the run's clock.
     pub search_time_s: Option<f64>,
-    /// Path travelled by the agent for this goal.
-    pub path_length_m: f32,
+    /// Path travelled by the agent for this goal; empty in a `--search-only` run, where the
+    /// agent does not move.
+    pub path_length_m: Option<f32>,
     /// The leg's exact optimum (from where the agent stood when the goal was set).
     pub optimal_m: Option<f32>,
     /// `path_length_m / optimal_m` for a reached goal.
@@ -390,6 +391,10 @@ pub struct Summary {
     pub goal_index: usize,
     pub runs: usize,
     pub reached: usize,
+    /// Runs in which the goal joined the tree (what a `--search-only` run counts; not in the
+    /// files, which hold the search times).
+    #[serde(skip)]
+    pub found: usize,
     pub collisions: u32,
     #[serde(serialize_with = "short")]
     pub search_time_median_s: Option<f64>,
@@ -451,7 +456,12 @@ pub fn summarise(rows: &[Row]) -> Vec<Summary> {
                 .collect();
             let reached: Vec<&&Row> = group.iter().filter(|r| r.reached).collect();
             let search = Spread::of(group.iter().filter_map(|r| r.search_time_s).collect());
-            let len = Spread::of(reached.iter().map(|r| f64::from(r.path_length_m)).collect());
+            let len = Spread::of(
+                reached
+                    .iter()
+                    .filter_map(|r| r.path_length_m.map(f64::from))
+                    .collect(),
+            );
             let ratios: Vec<f64> = reached
                 .iter()
                 .filter_map(|r| r.travelled_ratio.map(f64::from))
@@ -473,6 +483,7 @@ pub fn summarise(rows: &[Row]) -> Vec<Summary> {
             Summary {
                 runs: group.len(),
                 reached: reached.len(),
+                found: group.iter().filter(|r| r.search_time_s.is_some()).count(),
                 collisions: group.iter().map(|r| r.collisions).sum(),
                 search_time_median_s: search.median,
                 search_time_q1_s: search.q1,
@@ -514,6 +525,17 @@ pub fn read_rows(dir: &Path, repair: bool) -> Result<Vec<Row>> {
     let mut text = fs::read_to_string(&path).with_context(|| format!("{}", path.display()))?;
     if !text.is_empty() && !text.ends_with('\n') {
         let keep = text.rfind('\n').map_or(0, |i| i + 1);
+        eprintln!(
+            "warning: {}: its last line is cut ({} bytes without an end: a run stopped while \
+             writing it); {}",
+            path.display(),
+            text.len() - keep,
+            if repair {
+                "removed, the run is done again"
+            } else {
+                "left out (`experiment --resume` removes it and runs it again)"
+            }
+        );
         text.truncate(keep);
         if repair {
             write_atomic(&path, text.as_bytes())?;
@@ -606,6 +628,39 @@ pub fn done_runs(rows: &[Row]) -> BTreeSet<RunKey> {
     rows.iter().map(Row::key).collect()
 }
 
+/// A results folder's lock, held while a command writes the folder (`experiment`, its
+/// `--resume`, `merge`): a second writer is refused at once instead of interleaving rows or
+/// sharing temporary files. An advisory lock on `.lock` in the folder, which the system
+/// releases when the process ends, however it ends.
+pub struct FolderLock {
+    _file: fs::File,
+}
+
+impl FolderLock {
+    /// Locks `dir` (which exists), or says who to wait for.
+    pub fn take(dir: &Path) -> Result<Self> {
+        let path = dir.join(".lock");
+        let file = fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .with_context(|| format!("{}", path.display()))?;
+        match file.try_lock() {
+            Ok(()) => Ok(Self { _file: file }),
+            Err(fs::TryLockError::WouldBlock) => bail!(
+                "{} is being written by another run (its lock {} is held): wait for it to end, \
+                 or write to another folder",
+                dir.display(),
+                path.display()
+            ),
+            Err(fs::TryLockError::Error(e)) => {
+                Err(e).with_context(|| format!("locking {}", path.display()))
+            }
+        }
+    }
+}
+
 /// What `merge` did.
 #[derive(Debug)]
 pub struct Merged {
@@ -615,6 +670,8 @@ pub struct Merged {
     pub missing: usize,
     /// The summary written.
     pub summary: Vec<Summary>,
+    /// Whether the folders hold a `--search-only` experiment.
+    pub search_only: bool,
 }
 
 /// Joins results folders with equal settings into `out` (rows in canonical order, JSON,
@@ -623,10 +680,26 @@ pub struct Merged {
 /// contiguous (`--seed 1 --repeats 5`, `--seed 6 --repeats 5`, ...): the merged folder holds
 /// the whole range. A run found in two inputs is an error; runs of the matrix that no input
 /// holds are counted in `missing` (and named on stderr).
-pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
+pub fn merge(inputs: &[PathBuf], out: &Path, overwrite: bool) -> Result<Merged> {
     if inputs.is_empty() {
         bail!("merge: no input folders");
     }
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if let Some(d) = inputs.iter().find(|d| same(d, out)) {
+        bail!("merge: --out {} is one of the inputs", d.display());
+    }
+    if !overwrite && (out.join(MANIFEST).exists() || out.join(RUNS).exists()) {
+        bail!(
+            "merge: {} already holds an experiment's results: --overwrite replaces them, or \
+             choose another --out",
+            out.display()
+        );
+    }
+    fs::create_dir_all(out)?;
+    let _lock = FolderLock::take(out)?;
     let mut manifest: Option<Manifest> = None;
     let mut rows: Vec<Row> = Vec::new();
     let mut seen: BTreeSet<RunKey> = BTreeSet::new();
@@ -694,13 +767,13 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
             k.scenario, k.planner, k.seed
         );
     }
-    fs::create_dir_all(out)?;
     m.write(out)?;
     let summary = write_complete(out, &m.settings, &mut rows)?;
     Ok(Merged {
         runs: seen.len(),
         missing: missing.len(),
         summary,
+        search_only: m.settings.search_only,
     })
 }
 

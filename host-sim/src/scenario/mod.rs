@@ -79,8 +79,33 @@ pub const MAX_MAP_CELLS: u64 = 4096 * 4096;
 
 /// Reads a PNG map file with the mean-threshold rule (module docs); see [`decode_png`].
 pub fn load_png(path: &Path) -> Result<OwnedGrid> {
-    let bytes = std::fs::read(path).with_context(|| format!("reading map {}", path.display()))?;
+    let bytes = read_image(path, image::ImageFormat::Png)?;
     decode_png(&bytes, &path.display().to_string())
+}
+
+/// Reads an image file whole once its header has given a size within [`MAX_MAP_CELLS`] (a
+/// wrong file costs neither its gigabytes of reading nor their memory).
+fn read_image(path: &Path, format: image::ImageFormat) -> Result<Vec<u8>> {
+    let name = path.display();
+    let file = std::fs::File::open(path).with_context(|| format!("reading map {name}"))?;
+    let (w, h) = image::ImageReader::with_format(std::io::BufReader::new(file), format)
+        .into_dimensions()
+        .with_context(|| format!("reading the size of map {name}"))?;
+    check_size(w, h, &name.to_string())?;
+    std::fs::read(path).with_context(|| format!("reading map {name}"))
+}
+
+/// Refuses an empty image and one over [`MAX_MAP_CELLS`].
+fn check_size(w: u32, h: u32, name: &str) -> Result<()> {
+    if w == 0 || h == 0 {
+        bail!("map {name} is empty ({w} x {h} pixels)");
+    }
+    if w as u64 * h as u64 > MAX_MAP_CELLS || w > u16::MAX as u32 || h > u16::MAX as u32 {
+        bail!(
+            "map {name} is {w} x {h} pixels: at most {MAX_MAP_CELLS} cells (4096 x 4096) are supported"
+        );
+    }
+    Ok(())
 }
 
 /// Decodes a PNG map (named `name` in errors) with the mean-threshold rule (module docs), 1 m
@@ -113,14 +138,7 @@ fn decode_grey(
     let (w, h) = reader()
         .into_dimensions()
         .with_context(|| format!("reading the size of map {name}"))?;
-    if w == 0 || h == 0 {
-        bail!("map {name} is empty ({w} x {h} pixels)");
-    }
-    if w as u64 * h as u64 > MAX_MAP_CELLS || w > u16::MAX as u32 || h > u16::MAX as u32 {
-        bail!(
-            "map {name} is {w} x {h} pixels: at most {MAX_MAP_CELLS} cells (4096 x 4096) are supported"
-        );
-    }
+    check_size(w, h, name)?;
     let mut reader = reader();
     // Decoding buffers stay within the cap too (RGBA16 at most: 8 bytes a pixel).
     let mut limits = image::Limits::default();
@@ -189,8 +207,39 @@ pub fn load_ros_yaml(path: &Path) -> Result<MapFile> {
     let image: RosYaml =
         serde_yaml_ng::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let img = path.parent().unwrap_or(Path::new(".")).join(&image.image);
-    let bytes = std::fs::read(&img).with_context(|| format!("reading map {}", img.display()))?;
+    let bytes = read_image(&img, ros_image_format(&image.image)?)
+        .with_context(|| format!("the image of {}", path.display()))?;
     ros_map_from(&text, &bytes, &path.display().to_string())
+}
+
+/// The format of a ROS map's image from its name: PGM (or another PNM) or PNG.
+fn ros_image_format(image: &Path) -> Result<image::ImageFormat> {
+    let ext = image
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    Ok(match ext.as_deref() {
+        Some("png") => image::ImageFormat::Png,
+        Some("pgm" | "ppm" | "pnm" | "pbm") => image::ImageFormat::Pnm,
+        _ => bail!("image {} is not a PGM or a PNG", image.display()),
+    })
+}
+
+/// The cell sizes a map may have, in metres: 0.1 mm to 1 km. A ROS map is 0.01-0.1 m, a
+/// benchmark grid 0.25-10 m; beyond this range a figure is a typing or unit error (the core
+/// itself takes any finite size with a finite inverse and extent).
+pub const RESOLUTION_RANGE: std::ops::RangeInclusive<f32> = 1.0e-4..=1.0e3;
+
+/// Refuses a cell size outside [`RESOLUTION_RANGE`] (or not a number): `what` names where it
+/// was written.
+pub fn check_resolution(what: &str, r: f32) -> Result<()> {
+    if !RESOLUTION_RANGE.contains(&r) {
+        bail!(
+            "{what} = {r} m: a cell size must be a number of metres from {} to {}",
+            RESOLUTION_RANGE.start(),
+            RESOLUTION_RANGE.end()
+        );
+    }
+    Ok(())
 }
 
 /// A ROS map_server map from its YAML text and image bytes, with map_server's rule (mode
@@ -201,12 +250,7 @@ pub fn load_ros_yaml(path: &Path) -> Result<MapFile> {
 /// (a yaw is refused), y up. Mode `raw` is refused.
 pub fn ros_map_from(yaml: &str, image_bytes: &[u8], name: &str) -> Result<MapFile> {
     let y: RosYaml = serde_yaml_ng::from_str(yaml).with_context(|| format!("parsing {name}"))?;
-    if !(y.resolution.is_finite() && y.resolution > 0.0) {
-        bail!(
-            "{name}: resolution {} (must be a positive number of metres)",
-            y.resolution
-        );
-    }
+    check_resolution(&format!("{name}: resolution"), y.resolution)?;
     let negate = match &y.negate {
         None => false,
         Some(serde_yaml_ng::Value::Bool(b)) => *b,
@@ -239,15 +283,7 @@ pub fn ros_map_from(yaml: &str, image_bytes: &[u8], name: &str) -> Result<MapFil
             origin[2]
         );
     }
-    let ext = y
-        .image
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    let format = match ext.as_deref() {
-        Some("png") => image::ImageFormat::Png,
-        Some("pgm" | "ppm" | "pnm" | "pbm") => image::ImageFormat::Pnm,
-        _ => bail!("{name}: image {} is not a PGM or a PNG", y.image.display()),
-    };
+    let format = ros_image_format(&y.image).with_context(|| name.to_string())?;
     let (w, h, grey) = decode_grey(image_bytes, format, name)?;
     let occupied = |v: u8| {
         let p = if negate {
@@ -401,14 +437,12 @@ pub fn scenarios_from_str(
         let MapFile {
             grid: mut map,
             ros_origin,
-        } = load_map(&e.file)?;
+        } = load_map(&e.file).with_context(|| format!("scenario {name}"))?;
         if let Some(r) = e.resolution_m {
             if ros_origin.is_some() {
                 bail!("scenario {name}: resolution_m is for PNG maps; a ROS map's YAML gives it");
             }
-            if !(r.is_finite() && r > 0.0) {
-                bail!("scenario {name}: resolution_m = {r} (must be a positive number of metres)");
-            }
+            check_resolution(&format!("scenario {name}: resolution_m"), r)?;
             map.cell_bits = r.to_bits();
         }
         let cell = f32::from_bits(map.cell_bits);

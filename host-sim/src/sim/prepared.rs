@@ -656,7 +656,7 @@ pub fn row_with_optimum(
         seed,
         reached: g.result.reached,
         search_time_s: g.search_s,
-        path_length_m: g.result.travelled,
+        path_length_m: Some(g.result.travelled),
         optimal_m: optimal.map(|o| o as f32),
         travelled_ratio: optimal
             .filter(|_| g.result.reached)

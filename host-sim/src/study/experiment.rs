@@ -233,6 +233,10 @@ pub fn one_run(
             let any = if g.goal_index == 0 { anytime } else { None };
             let mut r = row(prep, cfg, seed, g, args.clock, final_nodes, any, run_wall_s);
             r.planner = planner.name.clone();
+            // The agent does not move in a search: no path (an empty field, not 0 m).
+            if args.search_only {
+                r.path_length_m = None;
+            }
             if let Some(d) = disc.as_ref().filter(|_| g.goal_index == first) {
                 d.finish(&mut r, prep, prep.scenario.goals[first]);
             }
@@ -338,6 +342,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     let planners = planners_of(args)?;
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("{}", out.display()))?;
+    let _lock = crate::results::FolderLock::take(out)?;
     let settings = settings(args)?;
     let old = crate::results::Manifest::read(out)?;
     let has_rows = out.join(crate::results::RUNS).exists();
@@ -486,9 +491,14 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
             sink.lock().map_err(|_| anyhow!("poisoned"))?.append(&r)?;
             // Off a terminal the bar draws nothing: a plain line per run instead.
             if bar.is_hidden() {
-                let reached = r.iter().filter(|row| row.reached).count();
+                let (done, what) = if args.search_only {
+                    let found = r.iter().filter(|row| row.search_time_s.is_some());
+                    (found.count(), "found")
+                } else {
+                    (r.iter().filter(|row| row.reached).count(), "reached")
+                };
                 eprintln!(
-                    "run {}/{}: {} on {} seed {seed}: {reached}/{} goals reached ({:.1} s)",
+                    "run {}/{}: {} on {} seed {seed}: {done}/{} goals {what} ({:.1} s)",
                     bar.position() + 1,
                     bar.length().unwrap_or(0),
                     cfg.name,
@@ -506,7 +516,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     result?;
     rows.extend(fresh.into_inner().map_err(|_| anyhow!("poisoned"))?);
     let summary = crate::results::write_complete(out, &manifest.settings, &mut rows)?;
-    print_summary(&summary);
+    print_summary(&summary, args.search_only);
     println!(
         "wrote {} ({} runs), runs.json, summary.csv and summary.json",
         out.join(crate::results::RUNS).display(),
@@ -523,14 +533,15 @@ fn fmt_opt(v: Option<f64>, scale: f64, prec: usize) -> String {
     v.map_or_else(|| "-".into(), |x| format!("{:.*}", prec, x * scale))
 }
 
-/// Prints the summary as a table (medians and interquartile ranges).
-pub fn print_summary(summary: &[Summary]) {
+/// Prints the summary as a table (medians and interquartile ranges); a `--search-only` run's
+/// counts goals found (the agent does not move to reach them).
+pub fn print_summary(summary: &[Summary], search_only: bool) {
     println!(
         "{:<22} {:<10} {:>4} {:>8} {:>5} {:>24} {:>24} {:>8} {:>8} {:>9}",
         "planner",
         "scenario",
         "goal",
-        "reached",
+        if search_only { "found" } else { "reached" },
         "coll",
         "search ms med [IQR]",
         "path m med [IQR]",
@@ -544,7 +555,7 @@ pub fn print_summary(summary: &[Summary]) {
             s.planner,
             s.scenario,
             s.goal_index,
-            s.reached,
+            if search_only { s.found } else { s.reached },
             s.runs,
             s.collisions,
             format!(

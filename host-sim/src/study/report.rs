@@ -118,7 +118,10 @@ impl Cell {
             found: rows.iter().filter(|r| r.search_time_s.is_some()).count(),
             collisions: rows.iter().map(|r| r.collisions).sum(),
             search_s: rows.iter().filter_map(|r| r.search_time_s).collect(),
-            path_m: reached.iter().map(|r| f64::from(r.path_length_m)).collect(),
+            path_m: reached
+                .iter()
+                .filter_map(|r| r.path_length_m.map(f64::from))
+                .collect(),
             ratio: reached
                 .iter()
                 .filter_map(|r| r.travelled_ratio.map(f64::from))

@@ -457,12 +457,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
             )
         });
         println!(
-            "  goal {} {goal}: reached {}, search time {}, travelled {:.2} m, exact optimum {}, {} collisions{clear}, {} nodes when found, {} plan calls",
+            "  goal {} {goal}: reached {}, search time {}, travelled {} m, exact optimum {}, {} collisions{clear}, {} nodes when found, {} plan calls",
             g.goal_index,
             g.reached,
             g.search_time_s
                 .map_or("-".into(), |s| format!("{:.3} ms", s * 1e3)),
-            g.path_length_m,
+            g.path_length_m.map_or("-".into(), |l| format!("{l:.2}")),
             match (g.optimal_m, g.travelled_ratio) {
                 (Some(o), Some(r)) => format!("{o:.2} m (travelled / optimum {r:.3})"),
                 (Some(o), None) => format!("{o:.2} m"),
