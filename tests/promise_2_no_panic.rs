@@ -98,10 +98,12 @@ fn tiny_capacities_stay_valid() {
 
 /// Issue 23, case 5: a table baked from a 150 x 150 grid was accepted with a 200 x 200 grid,
 /// and goals outside its area were refused with a misleading `Unreachable`. Now the planner
-/// refuses a table of another size or cell (every version), and a version-3 table of another
-/// grid of the same size (its recorded hash), with `SetupError::Metric(WrongMap)`.
+/// refuses a table of another size or cell (every version), and a version-3 or -4 table
+/// (pieces or uniform, the layouts host-sim writes) of another grid of the same size (its
+/// recorded hash), with `SetupError::Metric(WrongMap)`.
 #[test]
 fn regression_a_table_of_another_map_is_refused() {
+    use bi_am_rrt::Metric;
     use bi_am_rrt::metric::{ElementKind, Layout, TableError, TableHeader, fnv1a32};
     let grid = |n: u16, wall: u16| {
         let mut bits = vec![0u8; OccupancyGrid::bytes_needed(n, n)];
@@ -178,6 +180,53 @@ fn regression_a_table_of_another_map_is_refused() {
     let v1 = landmark_table(&g, 2);
     assert_eq!(try_plan(&small, 150, &v1), Ok(()));
     assert_eq!(try_plan(&big, 200, &v1), wrong);
+    // Issue 44: a uniform table is bound to its map too (version 4, the hash before the
+    // entries), and reads the same distances as the version-1 table of the same entries.
+    let uniform = |bits: &[u8], n: u16, stamp: bool| {
+        let g = OccupancyGrid::new(bits, n, n, 1.0).unwrap();
+        let header = TableHeader {
+            kind: ElementKind::F32,
+            dims: 2,
+            cols: n,
+            rows: n,
+            cell_size: 1.0,
+            scale: 1.0,
+            layout: Layout::Uniform,
+            map_hash: stamp.then(|| fnv1a32(bits)),
+        };
+        let mut out = vec![0u8; header.table_len().unwrap()];
+        bi_am_rrt::metric::write_table(&header, &mut out, |c, r, xy| {
+            xy[0] = c as f32;
+            xy[1] = r as f32;
+            !g.is_occupied(c, r)
+        })
+        .unwrap();
+        out
+    };
+    for stamp in [false, true] {
+        let t = uniform(&small, 150, stamp);
+        assert_eq!(
+            DiffusionTable::new(&t).unwrap().header().version(),
+            if stamp { 4 } else { 1 }
+        );
+        assert_eq!(try_plan(&small, 150, &t), Ok(()), "stamp {stamp}");
+        assert_eq!(try_plan(&big, 200, &t), wrong, "stamp {stamp}");
+    }
+    assert_eq!(try_plan(&other, 150, &uniform(&small, 150, true)), wrong);
+    assert_eq!(try_plan(&other, 150, &uniform(&small, 150, false)), Ok(()));
+    let (v1, v4) = (uniform(&small, 150, false), uniform(&small, 150, true));
+    let (v1, v4) = (
+        DiffusionTable::new(&v1).unwrap(),
+        DiffusionTable::new(&v4).unwrap(),
+    );
+    for (a, b) in [
+        ((1.5, 1.5), (140.5, 120.5)),
+        ((10.2, 3.3), (10.2, 3.3)),
+        ((20.0, 50.0), (149.9, 0.1)),
+    ] {
+        let (a, b) = (Point::new(a.0, a.1), Point::new(b.0, b.1));
+        assert_eq!(v1.distance(a, b).to_bits(), v4.distance(a, b).to_bits());
+    }
 }
 
 #[test]

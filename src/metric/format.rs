@@ -5,9 +5,10 @@ use crate::slots::to_u16;
 
 /// Magic bytes at the start of a diffusion table.
 pub const TABLE_MAGIC: [u8; 8] = *b"BIAMDIFF";
-/// The newest table format version this build reads and writes (it reads versions 1 and 2
-/// too).
-pub const TABLE_VERSION: u16 = 3;
+/// The newest table format version this build reads and writes (it reads versions 1 to 3
+/// too): 1 uniform, 2 pieces, 3 pieces bound to their map by its hash, 4 uniform bound to
+/// its map.
+pub const TABLE_VERSION: u16 = 4;
 /// Header size in bytes.
 pub const TABLE_HEADER_LEN: usize = 32;
 /// Most dimensions a table may have.
@@ -85,9 +86,10 @@ pub struct TableHeader {
     pub scale: f32,
     /// How positions map to entries.
     pub layout: Layout,
-    /// FNV-1a 32-bit hash of the packed occupancy grid the table was baked from (version 3:
-    /// a pieces table bound to its map, checked by [`DiffusionTable::check_map`](crate::metric::DiffusionTable::check_map)); `None` in
-    /// versions 1 and 2.
+    /// FNV-1a 32-bit hash of the packed occupancy grid the table was baked from (versions 3
+    /// and 4: a table bound to its map, checked by
+    /// [`DiffusionTable::check_map`](crate::metric::DiffusionTable::check_map); the payload
+    /// opens with it); `None` in versions 1 and 2.
     pub map_hash: Option<u32>,
 }
 
@@ -120,7 +122,8 @@ impl TableHeader {
         let len = match self.layout {
             Layout::Uniform => (self.cols as u64)
                 .checked_mul(self.rows as u64)?
-                .checked_mul(entry)?,
+                .checked_mul(entry)?
+                .checked_add(self.uniform_coords_at() as u64)?,
             Layout::Pieces { entries, .. } => {
                 let p = self.pieces()?;
                 (p.coords_at as u64).checked_add((entries as u64).checked_mul(entry)?)?
@@ -151,6 +154,11 @@ impl TableHeader {
             nibbles_at: usize::try_from(nibbles_at).ok()?,
             coords_at: usize::try_from(coords_at).ok()?,
         })
+    }
+
+    /// Where a uniform payload's entries start: after the map's hash in version 4.
+    pub(super) const fn uniform_coords_at(&self) -> usize {
+        if self.map_hash.is_some() { 4 } else { 0 }
     }
 
     /// Payload plus header, in bytes: the table's whole size.
@@ -186,7 +194,8 @@ impl TableHeader {
     /// The format version of this layout.
     pub const fn version(&self) -> u16 {
         match (self.layout, self.map_hash) {
-            (Layout::Uniform, _) => 1,
+            (Layout::Uniform, None) => 1,
+            (Layout::Uniform, Some(_)) => 4,
             (Layout::Pieces { .. }, None) => 2,
             (Layout::Pieces { .. }, Some(_)) => 3,
         }
@@ -304,21 +313,24 @@ fn table_parts<'o>(
     out.get_mut(..total)?.split_at_mut_checked(TABLE_HEADER_LEN)
 }
 
-/// Writes a version-1 table (header and payload) into `out` from per-cell coordinates given
-/// by `coords(col, row, &mut [f32]) -> bool` (false: unreachable). Returns the bytes written,
-/// or `None` when `out` is too small or the header is invalid (or not `Layout::Uniform`). For
-/// `ElementKind::I16` each coordinate is stored as `round(value / scale)`, clamped to
-/// `-32767..=32767`.
+/// Writes a uniform table (version 1, or 4 with `header.map_hash`) into `out` from per-cell
+/// coordinates given by `coords(col, row, &mut [f32]) -> bool` (false: unreachable). Returns
+/// the bytes written, or `None` when `out` is too small or the header is invalid (or not
+/// `Layout::Uniform`). For `ElementKind::I16` each coordinate is stored as
+/// `round(value / scale)`, clamped to `-32767..=32767`.
 pub fn write_table<F>(header: &TableHeader, out: &mut [u8], mut coords: F) -> Option<usize>
 where
     F: FnMut(u16, u16, &mut [f32]) -> bool,
 {
-    if header.layout != Layout::Uniform || header.map_hash.is_some() {
+    if header.layout != Layout::Uniform {
         return None;
     }
     let (head, payload) = table_parts(header, out)?;
+    if let Some(hash) = header.map_hash {
+        copy_bytes(payload.get_mut(..4)?, &hash.to_le_bytes());
+    }
     let mut buf = [0f32; TABLE_MAX_DIMS];
-    let mut at: usize = 0;
+    let mut at: usize = header.uniform_coords_at();
     for row in 0..header.rows {
         for col in 0..header.cols {
             let c = buf.get_mut(..header.dims as usize)?;

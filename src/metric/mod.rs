@@ -18,19 +18,19 @@
 //! the table's binary format below (header, versions, checksums, the writers the host bakes
 //! with) in `format`.
 //!
-//! # Table format (versions 1 to 3)
+//! # Table format (versions 1 to 4)
 //!
 //! Little-endian throughout. A 32-byte header, then the payload:
 //!
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `b"BIAMDIFF"` |
-//! | 8 | 2 | format version (1: uniform, 2: pieces, 3: pieces bound to a map) |
+//! | 8 | 2 | format version (1: uniform, 2: pieces, 3: pieces bound to a map, 4: uniform bound to a map) |
 //! | 10 | 2 | element kind: 1 = `i16` quantised, 2 = `f32` |
 //! | 12 | 2 | dimensions `k` (1..=32) |
-//! | 14 | 2 | columns (v1: table cells; v2, v3: map cells) |
+//! | 14 | 2 | columns (v1, v4: table cells; v2, v3: map cells) |
 //! | 16 | 2 | rows (likewise) |
-//! | 18 | 2 | v1: 0; v2, v3: block side `b` in cells (1..=64) |
+//! | 18 | 2 | v1, v4: 0; v2, v3: block side `b` in cells (1..=64) |
 //! | 20 | 4 | cell size in metres (`f32`, finite, positive) |
 //! | 24 | 4 | scale (`f32`): coordinate = element * scale |
 //! | 28 | 4 | FNV-1a 32-bit hash of the payload |
@@ -52,7 +52,11 @@
 //! `OccupancyGrid::bytes_needed` bytes of `map::pack_grid`'s layout), then the version-2
 //! payload. `DiffusionTable::check_map` (which `Planner::new` calls through
 //! `Metric::check_map`) refuses a grid of another size or cell size (every version) or, for
-//! version 3, other contents, with `TableError::WrongMap`.
+//! versions 3 and 4, other contents, with `TableError::WrongMap`.
+//!
+//! **Version 4 (uniform, bound to a map).** Version 1 whose payload opens with the map's hash
+//! as in version 3, then the version-1 entries. (`host-sim` writes versions 3 and 4; versions 1
+//! and 2, which a table of another map of the same size passes, are still read.)
 //!
 //! In all, an entry whose first element is `i16::MIN` (kind 1) or NaN (kind 2) is
 //! unreachable, as is a v2/v3 cell of piece 0.

@@ -12,7 +12,7 @@ use crate::slots::{cell_index, sat_u32, to_u16};
 pub struct DiffusionTable<'a> {
     pub(super) header: TableHeader,
     payload: &'a [u8],
-    /// The entries (all of the payload in version 1).
+    /// The entries (all of the payload in version 1, all but the map's hash in version 4).
     coords: &'a [u8],
     parts: Option<PieceParts>,
     inv_cell: f32,
@@ -43,7 +43,7 @@ impl<'a> DiffusionTable<'a> {
         }
         let field = |at| le_u16(head, at).ok_or(TableError::Truncated);
         let version = field(8)?;
-        if !(1..=3).contains(&version) {
+        if !(1..=4).contains(&version) {
             return Err(TableError::UnsupportedVersion);
         }
         let kind = match field(10)? {
@@ -69,7 +69,7 @@ impl<'a> DiffusionTable<'a> {
             return Err(TableError::BadHeader);
         }
         let block = field(18)?;
-        let layout = if version == 1 {
+        let layout = if version == 1 || version == 4 {
             if block != 0 {
                 return Err(TableError::BadHeader);
             }
@@ -88,7 +88,7 @@ impl<'a> DiffusionTable<'a> {
             }
             Layout::Pieces { block, entries }
         };
-        let map_hash = if version == 3 {
+        let map_hash = if version >= 3 {
             let hash = bytes.get(TABLE_HEADER_LEN..).and_then(|p| le_u32(p, 0));
             Some(hash.ok_or(TableError::Truncated)?)
         } else {
@@ -114,7 +114,7 @@ impl<'a> DiffusionTable<'a> {
         }
         let parts = header.pieces();
         let coords = payload
-            .get(parts.map_or(0, |p| p.coords_at)..)
+            .get(parts.map_or(header.uniform_coords_at(), |p| p.coords_at)..)
             .ok_or(TableError::Truncated)?;
         Ok(Self {
             header,
@@ -126,8 +126,8 @@ impl<'a> DiffusionTable<'a> {
     }
 
     /// Whether this table was baked from `grid`: the same cell size and extent (in table
-    /// cells for version 1) and, for a version-3 table, the same grid bytes (their FNV-1a
-    /// hash: one pass over the packed grid). `Planner::new` checks it through
+    /// cells for a uniform table) and, for a version-3 or -4 table, the same grid bytes (their
+    /// FNV-1a hash: one pass over the packed grid). `Planner::new` checks it through
     /// [`Metric::check_map`].
     pub fn check_map(&self, grid: &crate::map::OccupancyGrid<'_>) -> Result<(), TableError> {
         let h = &self.header;

@@ -520,7 +520,7 @@ pub struct TableOptions {
     pub max_memory: usize,
     /// What the diffusion map is computed on.
     pub basis: BasisChoice,
-    /// The hash of the map's packed grid, recorded in a pieces table (version 3: the table
+    /// The hash of the map's packed grid, recorded in the table (versions 3 and 4: the table
     /// is bound to its map); `bake::bake_diffusion` sets it.
     pub map_hash: Option<u32>,
     /// The cell (column, row) whose connected component of free cells the table covers; the
@@ -748,7 +748,7 @@ impl Pieces {
 }
 
 impl TableOptions {
-    /// Bytes the map's hash adds to a pieces table (version 3).
+    /// Bytes the map's hash adds to a table (versions 3 and 4).
     fn stamp_len(&self) -> usize {
         if self.map_hash.is_some() { 4 } else { 0 }
     }
@@ -837,6 +837,7 @@ impl TableOptions {
         }
         let size = |c: u32| {
             TABLE_HEADER_LEN
+                + self.stamp_len()
                 + (cols.div_ceil(c) * rows.div_ceil(c)) as usize * dims * self.kind.size()
         };
         let budget = self.budget((cols * rows) as usize);
@@ -997,7 +998,7 @@ pub fn table_bytes(graph: &GridGraph, map: &DiffusionMap, opts: &TableOptions) -
     let cols = graph.cols.div_ceil(c) as u16;
     let rows = graph.rows.div_ceil(c) as u16;
     let header = TableHeader {
-        map_hash: None,
+        map_hash: opts.map_hash,
         kind: opts.kind,
         dims: map.dims as u16,
         cols,
