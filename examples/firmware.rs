@@ -84,12 +84,12 @@ fn run() -> bool {
     let times = CALL_TIMES.take();
     // 1. The twin: same line as the host's.
     let twin_ok = match mission::fly(storage) {
-        Some(m) => {
+        Ok(m) => {
             hprintln!("{}", m);
             m.ok()
         }
-        None => {
-            hprintln!("twin mission refused its start or goal");
+        Err(e) => {
+            hprintln!("twin mission: {}", e);
             false
         }
     };

@@ -34,7 +34,7 @@ static STORAGE: ConstStaticCell<MissionStorage> = ConstStaticCell::new(Storage::
 #[entry]
 fn main() -> ! {
     let ok = match mission::fly(STORAGE.take()) {
-        Some(m) => {
+        Ok(m) => {
             defmt::println!(
                 "{} on {}: {} (work units: {})",
                 defmt::Display2Format(&m.planner),
@@ -44,8 +44,8 @@ fn main() -> ! {
             );
             m.ok()
         }
-        None => {
-            defmt::error!("mission refused its start or goal");
+        Err(e) => {
+            defmt::error!("mission: {}", defmt::Display2Format(&e));
             false
         }
     };

@@ -11,12 +11,12 @@ mod mission;
 fn main() {
     let mut storage: Box<mission::MissionStorage> = Box::default();
     match mission::fly(&mut storage) {
-        Some(m) => {
+        Ok(m) => {
             println!("{m}");
             std::process::exit(if m.ok() { 0 } else { 1 });
         }
-        None => {
-            eprintln!("mission refused its start or goal");
+        Err(e) => {
+            eprintln!("mission: {e}");
             std::process::exit(1);
         }
     }

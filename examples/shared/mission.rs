@@ -7,13 +7,33 @@ use bi_am_rrt::agent::{Protocol, RunResult, run_to_goal};
 use bi_am_rrt::builtin;
 use bi_am_rrt::clock::{Clock, FakeClock};
 use bi_am_rrt::config::PlannerName;
+use bi_am_rrt::error::{InputError, SetupError};
 use bi_am_rrt::{Config, Euclidean, Map, MetricKind, Planner, Storage};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
-/// Two trees of 2,048 nodes with 256 index buckets each: 90,288 bytes (all zero when
-/// empty, so a `static` of it lands in `.bss`). The firmware's one planner storage.
+/// Two trees of 2,048 nodes with 256 index buckets each: `Storage::BYTES`, 90,248 bytes on a
+/// 32-bit target (all zero when empty, so a `static` of it lands in `.bss`). The firmware's one
+/// planner storage.
 pub type MissionStorage = Storage<2048, 256>;
+
+/// Why the mission could not fly: the library's reason.
+#[derive(Clone, Copy, Debug)]
+pub enum Refused {
+    /// `Planner::new` refused the configuration, map or start.
+    Setup(SetupError),
+    /// `set_goal` refused the goal.
+    Goal(InputError),
+}
+
+impl fmt::Display for Refused {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Setup(e) => write!(f, "the planner refused its start: {e}"),
+            Self::Goal(e) => write!(f, "the planner refused the goal: {e}"),
+        }
+    }
+}
 
 /// What the mission measured.
 pub struct Mission {
@@ -72,13 +92,14 @@ impl fmt::Display for Metres {
 /// (inlined, the compiler may keep both missions' frames live at once: 1.8 KB more stack
 /// measured on the office sequence).
 #[inline(never)]
-pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
+pub fn fly(storage: &mut MissionStorage) -> Result<Mission, Refused> {
     let scenario = &builtin::OPEN;
     let map: Map<'static, 4> = Map::new(scenario.grid);
     let mut cfg = Config::bi_am_rrt();
     cfg.budget.t_exp = core::time::Duration::from_millis(5);
     let rng = XorShiftRng::seed_from_u64(1);
-    let mut planner = Planner::new(storage, map, Euclidean, rng, cfg, scenario.start).ok()?;
+    let mut planner =
+        Planner::new(storage, map, Euclidean, rng, cfg, scenario.start).map_err(Refused::Setup)?;
     let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
     let result = run_to_goal(
         &mut planner,
@@ -89,8 +110,8 @@ pub fn fly(storage: &mut MissionStorage) -> Option<Mission> {
         &Protocol::default(),
         |_, _, _| {},
     )
-    .ok()?;
-    Some(Mission {
+    .map_err(Refused::Goal)?;
+    Ok(Mission {
         planner: cfg.name(MetricKind::Euclidean),
         scenario: scenario.name,
         result,

@@ -23,12 +23,12 @@ static STORAGE: ConstStaticCell<mission::MissionStorage> =
 #[riscv_rt::entry]
 fn main() -> ! {
     let ok = match mission::fly(STORAGE.take()) {
-        Some(m) => {
+        Ok(m) => {
             hprintln!("{}", m);
             m.ok()
         }
-        None => {
-            hprintln!("mission refused its start or goal");
+        Err(e) => {
+            hprintln!("mission: {}", e);
             false
         }
     };

@@ -29,20 +29,40 @@ pub mod scenario {
     include!(concat!(env!("BIAMRRT_FLASH_DIR"), "/scenario.rs"));
 }
 
-/// The board's crystal: 12 MHz on the Adafruit Feather STM32F405 Express. Change it (and
-/// [`PLL_PREDIV`]) for another board: 8 MHz with `DIV4` on an STM32F4-Discovery, 25 MHz with
-/// `DIV25`... the PLL wants 1-2 MHz at its input.
+/// The board's crystal: 12 MHz on the Adafruit Feather STM32F405 Express. Change it, and
+/// [`PLL_PREDIV`] and [`PLL_MUL`] with it, for another board: 8 MHz with `DIV4` and `MUL168`
+/// on an STM32F4-Discovery, 25 MHz with `DIV25` and `MUL336`. [`CORE_HZ`] follows from the
+/// three, and the build fails if they leave the PLL's ranges or the chip's 168 MHz.
 pub const HSE_HZ: u32 = 12_000_000;
-/// The PLL's input divider: `HSE_HZ` / 6 = 2 MHz.
+/// The PLL's input divider: `HSE_HZ` / 6 = 2 MHz (the PLL wants 1-2 MHz at its input).
 pub const PLL_PREDIV: embassy_stm32::rcc::PllPreDiv = embassy_stm32::rcc::PllPreDiv::DIV6;
-/// The core clock [`init`] sets up: 2 MHz x 168 / 2 (and / 7 = 48 MHz for USB).
-pub const CORE_HZ: u32 = 168_000_000;
+/// The PLL's multiplier: 2 MHz x 168 = 336 MHz at the VCO (100-432 MHz).
+pub const PLL_MUL: embassy_stm32::rcc::PllMul = embassy_stm32::rcc::PllMul::MUL168;
+/// The core clock [`init`] sets up, derived: the VCO / 2 (and / 7 = 48 MHz for USB with a
+/// 336 MHz VCO). The planner's SysTick clock counts in it, so it cannot drift from the clock
+/// actually set (a 25 MHz crystal with `DIV25` and `MUL168` gives 84 MHz, and the clock
+/// would count 84 MHz too).
+pub const CORE_HZ: u32 = VCO_HZ / 2;
+const PLL_IN_HZ: u32 = HSE_HZ / PLL_PREDIV.to_bits() as u32;
+const VCO_HZ: u32 = PLL_IN_HZ * PLL_MUL.to_bits() as u32;
+const _: () = {
+    assert!(PLL_PREDIV.to_bits() >= 2, "PLL_PREDIV: 2 to 63");
+    assert!(
+        PLL_IN_HZ >= 1_000_000 && PLL_IN_HZ <= 2_000_000,
+        "the PLL's input (HSE_HZ / PLL_PREDIV) must be 1-2 MHz"
+    );
+    assert!(
+        VCO_HZ >= 100_000_000 && VCO_HZ <= 432_000_000,
+        "the VCO (input x PLL_MUL) must be 100-432 MHz"
+    );
+    assert!(CORE_HZ <= 168_000_000, "an STM32F405 runs at most 168 MHz");
+};
 /// The watchdog's timeout: a `plan` call lasts `t_exp` (150 ms) and a little, so a call
 /// that runs away (or a task that stops feeding it) resets the chip within half a second.
 pub const WATCHDOG_US: u32 = 500_000;
 
-/// Two trees of 2,048 nodes and 256 index buckets each (90,288 bytes in `.bss`), as in the
-/// QEMU firmware.
+/// Two trees of 2,048 nodes and 256 index buckets each (`Storage::BYTES`: 90,248 bytes in
+/// `.bss`), as in the QEMU firmware.
 pub type BoardStorage = Storage<2048, 256>;
 /// The planner the examples fly: the diffusion metric on the scenario in flash, up to four
 /// dynamic obstacles.
@@ -53,7 +73,7 @@ pub type BoardPlanner =
 /// flash wait states for it, then the ART accelerator (prefetch, instruction and data caches).
 pub fn init() -> embassy_stm32::Peripherals {
     use embassy_stm32::rcc::{
-        AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllQDiv, PllSource, Sysclk,
+        AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllPDiv, PllQDiv, PllSource, Sysclk,
     };
     let mut config = embassy_stm32::Config::default();
     config.rcc.hse = Some(Hse {
@@ -63,7 +83,7 @@ pub fn init() -> embassy_stm32::Peripherals {
     config.rcc.pll_src = PllSource::HSE;
     config.rcc.pll = Some(Pll {
         prediv: PLL_PREDIV,
-        mul: PllMul::MUL168,
+        mul: PLL_MUL,
         divp: Some(PllPDiv::DIV2),
         divq: Some(PllQDiv::DIV7),
         divr: None,
@@ -91,6 +111,11 @@ pub fn bring_up() -> (
     SysTickClock,
 ) {
     let p = init();
+    // The watchdog stops while a debugger halts the core (DBGMCU_APB1_FZ.DBG_IWDG_STOP): a
+    // breakpoint held for more than WATCHDOG_US would otherwise reset the chip under it.
+    embassy_stm32::pac::DBGMCU
+        .apb1fzr()
+        .modify(|w| w.set_iwdg(true));
     let mut dog = IndependentWatchdog::new(p.IWDG, WATCHDOG_US);
     dog.unleash();
     let Some(cp) = cortex_m::Peripherals::take() else {
@@ -99,13 +124,15 @@ pub fn bring_up() -> (
     (dog, SysTickClock::start(cp.SYST, CORE_HZ))
 }
 
-/// What can stop the planner from starting.
+/// What can stop the planner from starting, with the library's reason.
 #[derive(Clone, Copy, Debug, defmt::Format)]
 pub enum BoardError {
-    /// The grid or the table in flash does not decode.
-    Scenario,
-    /// The planner refused its configuration or start.
-    Setup,
+    /// The grid (or the robot's inflated grid) in flash does not decode.
+    Grid(bi_am_rrt::error::MapError),
+    /// The diffusion table in flash does not decode.
+    Table(bi_am_rrt::error::TableError),
+    /// The planner refused its configuration, map or start.
+    Setup(bi_am_rrt::error::SetupError),
 }
 
 /// The planner at the scenario's start: Bi-AM-RRT*(D) with lengths that follow the map,
@@ -122,8 +149,8 @@ pub fn planner(
         scenario::ROWS,
         scenario::CELL,
     )
-    .map_err(|_| BoardError::Scenario)?;
-    let table = DiffusionTable::new(&scenario::TABLE).map_err(|_| BoardError::Scenario)?;
+    .map_err(BoardError::Grid)?;
+    let table = DiffusionTable::new(&scenario::TABLE).map_err(BoardError::Table)?;
     let base = Config::bi_am_rrt();
     let base = if tuned { base.tuned() } else { base };
     let mut cfg = base.for_grid(&grid).with_sigma(scenario::SIGMA);
@@ -139,12 +166,12 @@ pub fn planner(
         )
         .and_then(|s| s.inflated_for(scenario::ROBOT_RADIUS))
         .and_then(|s| Map::new(grid).with_baked_body(s))
-        .map_err(|_| BoardError::Scenario)?
+        .map_err(BoardError::Grid)?
     } else {
         Map::new(grid)
     };
     let rng = XorShiftRng::seed_from_u64(1);
-    Planner::new(storage, map, table, rng, cfg, start()).map_err(|_| BoardError::Setup)
+    Planner::new(storage, map, table, rng, cfg, start()).map_err(BoardError::Setup)
 }
 
 /// The scenario's start.
