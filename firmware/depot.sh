@@ -8,7 +8,7 @@
 #
 # Fails when a goal is missed, a collision or a panic happens, a call overruns t_exp by more
 # than 1 ms, or the firmware leaves the flash (256 KiB) or RAM (96 KiB) budget. Writes
-# docs/firmware-depot.txt (the README quotes it after `<!-- docs/firmware-depot.txt -->`);
+# docs/firmware-depot.txt (docs/guides/firmware.md quotes it after `<!-- docs/firmware-depot.txt -->`);
 # --check compares instead of writing (`.ci/run` does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -55,13 +55,13 @@ for set in paper tuned; do
 done
 if [ "$check" = 1 ]; then
   if ! diff -u "$doc" "$out"; then
-    echo "the depot firmware's figures changed: run firmware/depot.sh and copy $doc into the README block after <!-- docs/firmware-depot.txt -->"
+    echo "the depot firmware's figures changed: run firmware/depot.sh and copy $doc into the block of docs/guides/firmware.md after <!-- docs/firmware-depot.txt -->"
     exit 1
   fi
   awk '/^<!-- docs\/firmware-depot.txt -->$/ { on = 1; next }
     on && /^```text$/ { next }
     on && /^```$/ { exit }
-    on { print }' README.md | diff -u "$doc" -
+    on { print }' docs/guides/firmware.md | diff -u "$doc" -
 else
   cp "$out" "$doc"
 fi

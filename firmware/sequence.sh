@@ -5,7 +5,7 @@
 #
 #   firmware/sequence.sh [--check] [--hw-sqrt | --m0 | --riscv] [--robot-radius R]
 #
-# Writes docs/firmware-sequence.txt (the README quotes it); with --hw-sqrt (nightly Rust, the
+# Writes docs/firmware-sequence.txt (docs/guides/firmware.md's table quotes it); with --hw-sqrt (nightly Rust, the
 # FPU's square root: feature `hw-sqrt`) docs/firmware-sequence-hw-sqrt.txt; with --m0 the
 # Cortex-M0+ build (firmware/m0-twin's `office`: soft float, SysTick at 25 MHz on QEMU's
 # mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt; with --riscv the

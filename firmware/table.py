@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""The README's firmware table, from the figures `firmware/sequence.sh` wrote to
+"""The firmware guide's table (docs/guides/firmware.md), from the figures `firmware/sequence.sh` wrote to
 docs/firmware-sequence*.txt (one row per target and set). Prints it; with --check, compares it
-with the README's table (between `<!-- firmware-table -->` and the next blank line) and exits 1
+with the guide's table (between `<!-- firmware-table -->` and the next blank line) and exits 1
 when they differ; with --write, replaces it."""
 import re
 import sys
@@ -44,14 +44,14 @@ def table():
 
 def main():
     want = table()
-    readme = ROOT / "README.md"
+    readme = ROOT / "docs" / "guides" / "firmware.md"
     text = readme.read_text()
     marker = "<!-- firmware-table -->\n"
     start = text.index(marker) + len(marker)
     end = text.index("\n\n", start) + 1
     if "--check" in sys.argv:
         if text[start:end] != want:
-            sys.stderr.write("README firmware table differs from docs/firmware-sequence*.txt:\n")
+            sys.stderr.write("docs/guides/firmware.md's firmware table differs from docs/firmware-sequence*.txt:\n")
             sys.stderr.write(want)
             sys.exit(1)
     elif "--write" in sys.argv:

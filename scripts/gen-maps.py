@@ -17,7 +17,7 @@ and a scenario file (nothing is committed):
   side): rooms split at random with 0.15 m walls and 0.9 m doors, furniture, and specks of
   sensor noise (one cell in 2,000).
 
-The figures of README's "Big maps" paragraph and of host-sim/src/optimum.rs come from these.
+The figures of the simulator guide's "Big maps" paragraph and of host-sim/src/metric/optimum.rs come from these.
 """
 
 import pathlib

@@ -10,7 +10,7 @@
 use crate::tree::NodeId;
 
 /// Capacity of every sweep queue and stack: 256 ids, 512 bytes each. Measured against
-/// `N`-deep queues on the reference maps with 8,192-node trees (README, "Firmware"): search
+/// `N`-deep queues on the reference maps with 8,192-node trees (docs/guides/firmware.md): search
 /// times and travelled paths unchanged, the tree's cost after 100 ms 0.6-0.8 % higher on
 /// office (the goal sweep's frontier there outgrows 256), unchanged on bug_trap and maze.
 pub const SWEEP_CAP: usize = 256;

@@ -291,7 +291,7 @@ pub(crate) struct FidelityArgs {
     paper: bool,
     /// Table 2's lengths in metres as printed (e_max 5 m, sigma 30 m, ...) instead of
     /// the lengths that follow the map (the default: Table 2's on maps 100-200 m across,
-    /// proportional to the map's size off that range; README "Lengths that follow the map").
+    /// proportional to the map's size off that range; docs/guides/configurations.md, "Lengths that follow the map").
     #[arg(long)]
     paper_lengths: bool,
     /// Parts of Algorithms 4-6 and the Meet run exactly as printed instead of this crate's
