@@ -432,7 +432,7 @@ fn shards_merge_and_resume_give_the_rows_of_one_run() {
         text.contains("8 of 8 runs") && text.contains("Notes by hand."),
         "{text}"
     );
-    assert!(text.contains("![fig6c](results/fig6c.svg)"), "{text}");
+    assert!(text.contains("![fig6c](charts/fig6c.svg)"), "{text}");
     assert!(text.contains("| (c) both (Bi-) | maze |"), "{text}");
     // Issue 24: search-only runs do not arrive; the report counts the goals they found.
     assert!(
@@ -1350,40 +1350,38 @@ fn every_parameter_is_an_override() {
     assert_eq!(got[0].cfg.cfg.tactics, want);
 }
 
-/// docs/results.md is what `report` makes of the data committed beside it (regenerate it with
-/// the command on its first line when the report changes).
+/// Every results page (`docs/results/STUDY/README.md`) is what `report` makes of the data
+/// committed beside it (`data/`, with the hand-written `notes.md`); regenerate it with the
+/// command on its first line when the report changes.
 #[test]
 fn docs_results_is_the_report_of_its_data() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let docs = root.join("docs");
-    // Full speed (results.md), the paper's pace (results-pace.md), its sigma study, Fig. 7.
-    for page in [
-        "results",
-        "results-pace",
-        "results-sigma",
-        "results-fig7",
-        "results-fig7-full",
-    ] {
-        let notes = std::fs::read_to_string(docs.join(format!("{page}-notes.md"))).unwrap();
+    let results = root.join("docs").join("results");
+    // Full speed, the paper's pace, its sigma study, Fig. 7 at the pace and at full speed.
+    for study in ["full-speed", "pace", "sigma", "fig7", "fig7-full"] {
+        let here = results.join(study);
+        let notes = std::fs::read_to_string(here.join("notes.md")).unwrap();
         let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join(format!("{page}.md"));
+        let out = dir.path().join("README.md");
+        let rel = format!("docs/results/{study}");
         let command = format!(
-            "host-sim report --results docs/{page}-data --out docs/{page}.md --notes docs/{page}-notes.md"
+            "host-sim report --results {rel}/data --out {rel}/README.md --notes {rel}/notes.md"
         );
-        let data = docs.join(format!("{page}-data"));
+        let data = here.join("data");
         host_sim::study::report::report(&data, &out, &command, Some(&notes)).unwrap();
         let made = std::fs::read_to_string(&out).unwrap();
-        let committed = std::fs::read_to_string(docs.join(format!("{page}.md"))).unwrap();
+        let committed = std::fs::read_to_string(here.join("README.md")).unwrap();
         // The folder path in the text is the one given; the committed page was made from the
         // repository root.
-        let made = made.replace(&data.display().to_string(), &format!("docs/{page}-data"));
+        let made = made.replace(&data.display().to_string(), &format!("{rel}/data"));
         assert!(
             made == committed,
-            "docs/{page}.md is stale: regenerate it with {command}"
+            "{rel}/README.md is stale: regenerate it with {command}"
         );
     }
-    // One switch at a time (results-printed.md), made by `compare`.
-    let data = docs.join("results-printed-data");
+    // One reading at a time (docs/results/printed), made by `compare`.
+    let here = results.join("printed");
+    let data = here.join("data");
     let variants: Vec<(String, std::path::PathBuf)> = [
         ("alg4-take", "alg4-take"),
         ("alg6-take", "alg6-take"),
@@ -1396,29 +1394,29 @@ fn docs_results_is_the_report_of_its_data() {
     .map(|(l, d)| (l.to_string(), data.join(d)))
     .collect();
     let command = format!(
-        "host-sim compare --base docs/results-printed-data/none {} --out docs/results-printed.md \
-         --notes docs/results-printed-notes.md",
+        "host-sim compare --base docs/results/printed/data/none {} --out \
+         docs/results/printed/README.md --notes docs/results/printed/notes.md",
         variants
             .iter()
             .map(|(l, d)| format!(
-                "{l}=docs/results-printed-data/{}",
+                "{l}=docs/results/printed/data/{}",
                 d.file_name().unwrap().to_string_lossy()
             ))
             .collect::<Vec<_>>()
             .join(" ")
     );
-    let notes = std::fs::read_to_string(docs.join("results-printed-notes.md")).unwrap();
+    let notes = std::fs::read_to_string(here.join("notes.md")).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("results-printed.md");
+    let out = dir.path().join("README.md");
     host_sim::study::report::compare(&data.join("none"), &variants, &out, &command, Some(&notes))
         .unwrap();
     let made = std::fs::read_to_string(&out)
         .unwrap()
-        .replace(&data.display().to_string(), "docs/results-printed-data");
-    let committed = std::fs::read_to_string(docs.join("results-printed.md")).unwrap();
+        .replace(&data.display().to_string(), "docs/results/printed/data");
+    let committed = std::fs::read_to_string(here.join("README.md")).unwrap();
     assert!(
         made == committed,
-        "docs/results-printed.md is stale: regenerate it with {command}"
+        "docs/results/printed/README.md is stale: regenerate it with {command}"
     );
 }
 
@@ -1469,7 +1467,7 @@ fn regression_a_disc_that_blocks_a_joined_path_does_not_starve_the_tree() {
 #[test]
 fn notes_quote_the_data_and_a_quote_it_cannot_answer_fails() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let data = root.join("docs/results-pace-data");
+    let data = root.join("docs/results/pace/data");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("r.md");
     let good = "AM-RRT*(D)-2 on office: {{change|path|AM-RRT*(D)-2|office}}; \

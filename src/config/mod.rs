@@ -108,7 +108,7 @@ pub struct AsPrinted {
     /// free segment: after the 16 cheapest pairs (by the joined path's cost) the others in
     /// index order, until a free one or the call's deadline. Off: the 16 cheapest only, so a
     /// new node whose cheap partners are all behind a wall waits for the next one (issue 24;
-    /// measured to make no difference, `docs/results-printed.md`).
+    /// measured to make no difference, `docs/results/printed/README.md`).
     pub meet_all_pairs: bool,
 }
 

@@ -45,7 +45,7 @@
 //!   (1)-(3) are switches of [`crate::AsPrinted`] (`Config::as_printed`, off in both named
 //!   sets), one per departure: with them on, Algorithms 4 and 6 run as printed (the clearing
 //!   test with "or" read as "and"). Measured one at a time at the paper's pace, 25 seeds
-//!   (`docs/results-printed.md`): none moves a path length, search time or node count
+//!   (`docs/results/printed/README.md`): none moves a path length, search time or node count
 //!   outside seed noise. The goal queue's order was a bug (fixed: first in, first out).
 //! - **Path shortcuts** (tuned, [`crate::config::Rewiring::path_shortcuts`]; not in the
 //!   paper): a cursor walks the path from the goal towards the root, a few nodes per

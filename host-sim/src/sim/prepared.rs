@@ -603,7 +603,7 @@ pub fn paper_pace(c: &mut Config) {
 /// (5-6 ms) of rewiring after every expansion, so a 150 ms call of the paper's implementation
 /// held at most about 150 / (6 + 1) = 21 expansions (1 ms for the expansion itself is an
 /// assumption). The paper's own counts at goal on bug_trap (AM-RRT*(D) 76 nodes, RT-RRT* 445,
-/// AM-RRT*(E) 1,062) are what `docs/results-pace.md` compares against.
+/// AM-RRT*(E) 1,062) are what `docs/results/pace/README.md` compares against.
 pub const PAPER_EXPANSIONS_PER_CALL: u32 = 20;
 
 /// Rewiring visits per phase and expansion at the paper's pace: 2-4 ms of Python at an

@@ -216,7 +216,8 @@ pub struct Report {
 }
 
 /// Writes the report of the results folder `results` to `out` (a `.md` file); the charts go
-/// to a folder beside it named after it (`docs/results.md` -> `docs/results/`). `notes`
+/// to the folder `charts` beside it (one folder per study: `docs/results/pace/README.md`,
+/// `notes.md`, `data/`, `charts/`). `notes`
 /// (Markdown written by hand, e.g. how the results compare with the paper's) goes after the
 /// settings, so regenerating the report keeps it.
 pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) -> Result<Report> {
@@ -237,8 +238,7 @@ pub fn report(results: &Path, out: &Path, command: &str, notes: Option<&str>) ->
         .filter(|p| goal1.iter().any(|r| &r.planner == *p))
         .cloned()
         .collect();
-    let stem = out.with_extension("");
-    let chart_dir = stem.clone();
+    let chart_dir = out.parent().unwrap_or(Path::new(".")).join("charts");
     std::fs::create_dir_all(&chart_dir).with_context(|| format!("{}", chart_dir.display()))?;
     let rel = chart_dir
         .file_name()
