@@ -3,7 +3,8 @@
 #
 #   scripts/docs.sh [--check] [--firmware]
 #
-# Always: the configuration reference (`host-sim params`) and each results page
+# Always: the configuration and command-line references (`host-sim params`, `host-sim
+# cli-reference`) and each results page
 # (`docs/results/STUDY/README.md` and its charts, by `host-sim report` or `compare` from
 # `data/` and the hand-written `notes.md`). These take seconds; with --check the pages are
 # made in a temporary folder and compared instead of written (the tests
@@ -45,6 +46,8 @@ if [ "$check" = 1 ]; then
 fi
 
 "$sim" params >"$out/configuration.md"
+mkdir -p "$out/reference"
+"$sim" cli-reference >"$out/reference/cli.md"
 
 for s in full-speed pace sigma fig7 fig7-full; do
   d=docs/results/$s
@@ -66,7 +69,7 @@ done
 if [ "$check" = 1 ]; then
   sed -i "s|$out/results/printed|$p|g" "$out/results/printed/README.md"
   stale=0
-  for f in configuration.md results/{full-speed,pace,sigma,fig7,fig7-full,printed}/README.md; do
+  for f in configuration.md reference/cli.md results/{full-speed,pace,sigma,fig7,fig7-full,printed}/README.md; do
     if ! diff -q "docs/$f" "$out/$f" >/dev/null; then
       echo "docs/$f is stale: run scripts/docs.sh"
       stale=1
@@ -75,7 +78,7 @@ if [ "$check" = 1 ]; then
   [ "$stale" = 0 ] && echo "the generated pages of docs/ are current"
   exit "$stale"
 fi
-echo "regenerated docs/configuration.md and docs/results/*/README.md"
+echo "regenerated docs/configuration.md, docs/reference/cli.md and docs/results/*/README.md"
 
 if [ "$firmware" = 1 ]; then
   firmware/depot.sh

@@ -360,9 +360,10 @@ fn regression_storage_fits_4096_nodes_in_96_kib() {
         per_tree(s1024, 1024),
         "the fixed part grows with N"
     );
-    // The office firmware measured a 3.6 KiB stack high-water mark (CI checks the real total).
+    // The office firmware's stack high-water mark is about 5 KiB (docs/firmware-office.txt; CI
+    // checks the real total against 96 KiB).
     assert!(
-        s2048 + 4 * 1024 <= 96 * 1024,
+        s2048 + 6 * 1024 <= 96 * 1024,
         "{s2048} bytes leave no room for a stack"
     );
 }

@@ -1320,6 +1320,25 @@ fn docs_configuration_is_the_parameter_table() {
     );
 }
 
+/// docs/reference/cli.md is every command's help as the binary prints it (issue 44: the CLI
+/// reference is generated, not typed).
+#[test]
+fn docs_cli_reference_is_the_commands_help() {
+    let page = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/reference/cli.md");
+    let committed = std::fs::read_to_string(&page).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("cli-reference")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let made = String::from_utf8(out.stdout).unwrap();
+    assert!(made.contains("## host-sim experiment") && made.contains("--resume"));
+    assert!(
+        committed == made,
+        "docs/reference/cli.md is stale: cargo run -p host-sim -- cli-reference > docs/reference/cli.md"
+    );
+}
+
 /// Every value of the parameter table is an override of the simulator's planner names, and a
 /// bad value or name is refused with the table's words.
 #[test]
