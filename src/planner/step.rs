@@ -40,10 +40,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// expansions leave time for following it once the goal joins or the path changes
     /// (retried after the loop; when it does not fit, the agent holds with
     /// [`Wait::OutOfTime`]). On a real clock a call therefore overruns `t_exp` by at most the
-    /// rest of one short piece of an expansion step: measured on a Cortex-M4F model
-    /// (`firmware/sequence.sh`, office, all six goals, 2 x 2,048 nodes, 150 ms),
-    /// 0.67 ms (paper's set) and 0.40 ms (tuned) at worst. And whatever the clock (even
-    /// one that never advances) a call does at most `max_work + W_step` units, where `W_step` is the most work between two checks:
+    /// rest of one short piece of an expansion step: under 1 ms on a Cortex-M4F model, as
+    /// `firmware/sequence.sh` measures it over the office's six goals (the worst calls of both
+    /// sets are in `docs/guides/firmware.md`'s table, which CI keeps equal to that run's
+    /// output). And whatever the clock (even one that never advances) a call does at most
+    /// `max_work + W_step` units, where `W_step` is the most work between two checks:
     /// one expansion or one rewiring visit. Both are `O(N + e_max / cell)`: an expansion does
     /// at most one metric nearest scan (N metric evaluations), one meet test (N visits and 16
     /// segment tests), one graft (4 units per grafted node, at most N), one re-rooting (N)
