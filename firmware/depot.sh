@@ -12,6 +12,7 @@
 # --check compares instead of writing (`.ci/run` does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source firmware/paths.sh
 check=0
 if [ "${1:-}" = --check ]; then check=1; fi
 LLVM_SIZE=$(find "$(rustc --print sysroot)" -name llvm-size -type f | head -n 1)

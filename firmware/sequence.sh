@@ -16,6 +16,7 @@
 # the map) and the figures go to docs/firmware-sequence-body-R.txt (the M4F build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source firmware/paths.sh
 check=0
 hw=0
 m0=0
