@@ -25,7 +25,6 @@ pub mod optimum;
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
-use std::rc::Rc;
 use std::sync::Arc;
 
 use bi_am_rrt::Point;
@@ -34,9 +33,11 @@ use bi_am_rrt::metric::{DiffusionTable, Euclidean, Metric, Prepared};
 use crate::metric::graph::GridGraph;
 
 /// `d_G` over a shared grid graph, with a per-target field cache (module docs).
+/// `Send` (fields shared by `Arc`): a planner on it may move to another thread (the Python
+/// bindings release the interpreter's lock while it plans).
 pub struct Geodesic {
     graph: Arc<GridGraph>,
-    fields: RefCell<HashMap<u32, Rc<[f32]>>>,
+    fields: RefCell<HashMap<u32, Arc<[f32]>>>,
     max_fields: usize,
     scratch: RefCell<Vec<f64>>,
     runs: Cell<u64>,
@@ -69,7 +70,7 @@ impl Geodesic {
     }
 
     /// The distance field to `node` (cells).
-    pub fn field(&self, node: u32) -> Rc<[f32]> {
+    pub fn field(&self, node: u32) -> Arc<[f32]> {
         if let Some(f) = self.fields.borrow().get(&node) {
             return f.clone();
         }
@@ -79,7 +80,7 @@ impl Geodesic {
         // One work unit per directed edge (a Dijkstra run relaxes each once).
         self.work
             .set(self.work.get() + self.graph.edge_count() as u64);
-        let field: Rc<[f32]> = scratch.iter().map(|&d| d as f32).collect();
+        let field: Arc<[f32]> = scratch.iter().map(|&d| d as f32).collect();
         let mut fields = self.fields.borrow_mut();
         if fields.len() >= self.max_fields {
             // Simple bounded cache: start afresh (the goal's field is recomputed at once).

@@ -57,6 +57,9 @@ pub struct Prepared {
     /// The straight pieces of each leg's exact shortest path, once computed
     /// ([`Prepared::warn_narrow_legs`]).
     pieces: OnceLock<Vec<Option<usize>>>,
+    /// A diffusion table the caller gave ([`Prepared::with_diffusion_table`]): the planners'
+    /// diffusion metric instead of a bake.
+    given_table: Option<Vec<u8>>,
 }
 
 impl Prepared {
@@ -77,7 +80,18 @@ impl Prepared {
             pieces: OnceLock::new(),
             no_optimum: false,
             grid_paths: OnceLock::new(),
+            given_table: None,
         }
+    }
+
+    /// This scenario with a diffusion table the caller baked or loaded (a file `host-sim bake`
+    /// writes): the planners with the diffusion metric read it instead of a bake. The table's
+    /// checksum is verified here; a table of another map is refused when a planner starts on
+    /// it (its map hash).
+    pub fn with_diffusion_table(mut self, bytes: Vec<u8>) -> Result<Self> {
+        DiffusionTable::new(&bytes).map_err(|e| anyhow!("diffusion table: {e}"))?;
+        self.given_table = Some(bytes);
+        Ok(self)
     }
 
     /// This scenario without the exact optimum (`--no-optimum`: rows leave `optimal_m` and
@@ -224,10 +238,15 @@ impl Prepared {
     pub fn metric(&self, kind: MetricKind) -> Result<AnyMetric<'_>> {
         Ok(match kind {
             MetricKind::Euclidean => AnyMetric::Euclidean,
-            MetricKind::Diffusion => AnyMetric::Diffusion(
-                DiffusionTable::new_unverified(&self.diffusion()?.table)
-                    .map_err(|e| anyhow!("table: {e}"))?,
-            ),
+            MetricKind::Diffusion => {
+                let bytes = match &self.given_table {
+                    Some(b) => b,
+                    None => &self.diffusion()?.table,
+                };
+                AnyMetric::Diffusion(
+                    DiffusionTable::new_unverified(bytes).map_err(|e| anyhow!("table: {e}"))?,
+                )
+            }
             MetricKind::Geodesic => AnyMetric::Geodesic(Geodesic::with_cache_bytes(
                 self.graph(),
                 GEODESIC_CACHE_BYTES,
@@ -302,8 +321,9 @@ pub fn with_planner_in<const N: usize, T>(
     f(&mut planner_on(storage, prep, map, cfg, seed, start)?)
 }
 
-/// The planner of `prep` on `map` (the scenario's grid, with or without an overlay).
-fn planner_on<'s, 'm, const N: usize>(
+/// The planner of `prep` on `map` (the scenario's grid, with or without an overlay), in
+/// `storage`: what [`with_planner_in`] hands on, for a caller that keeps the planner itself.
+pub fn planner_on<'s, 'm, const N: usize>(
     storage: &'s mut Storage<N, BUCKETS>,
     prep: &'m Prepared,
     map: Map<'m, OBSTACLES>,
@@ -329,18 +349,32 @@ pub fn with_live_planner<T>(
     seed: u64,
     f: impl FnOnce(&mut SimPlanner<'_, '_>) -> Result<T>,
 ) -> Result<T> {
-    let grid = prep.scenario.map.grid();
-    let n = bi_am_rrt::OccupancyGrid::bytes_needed(grid.cols(), grid.rows());
+    let n = live_bytes(prep);
     let (mut overlay, mut space) = (vec![0u8; n], vec![0u8; n]);
     let mut storage: Box<Storage<NODES, BUCKETS>> = Box::default();
-    // With a body, the live cells re-inflate into `space` as they are edited.
-    let map = Map::new(grid)
-        .with_overlay(&mut overlay)
-        .and_then(|m| m.with_body(prep.scenario.robot_radius, &mut space))
-        .map_err(|e| anyhow!("overlay: {e}"))?;
-    let map = prep.scenario.with_clearance_field(map)?;
+    let map = live_map(prep, &mut overlay, &mut space)?;
     let start = prep.scenario.start;
     f(&mut planner_on(&mut storage, prep, map, cfg, seed, start)?)
+}
+
+/// The bytes of each buffer [`live_map`] takes.
+pub fn live_bytes(prep: &Prepared) -> usize {
+    let grid = prep.scenario.map.grid();
+    bi_am_rrt::OccupancyGrid::bytes_needed(grid.cols(), grid.rows())
+}
+
+/// The scenario's map with a live overlay in `overlay` (and, with a body, its inflation in
+/// `space`: the live cells re-inflate there as they are edited), each [`live_bytes`] long.
+pub fn live_map<'m>(
+    prep: &'m Prepared,
+    overlay: &'m mut [u8],
+    space: &'m mut [u8],
+) -> Result<Map<'m, OBSTACLES>> {
+    let map = Map::new(prep.scenario.map.grid())
+        .with_overlay(overlay)
+        .and_then(|m| m.with_body(prep.scenario.robot_radius, space))
+        .map_err(|e| anyhow!("overlay: {e}"))?;
+    prep.scenario.with_clearance_field(map)
 }
 
 /// One goal of a run.

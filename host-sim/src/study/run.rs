@@ -83,7 +83,7 @@ fn join_scenes(
 /// One goal of `result.json`: the row, the robot's radius, the trail's clearance and the
 /// trail itself.
 #[derive(serde::Serialize)]
-struct GoalJson<'a> {
+pub struct GoalJson<'a> {
     #[serde(flatten)]
     row: &'a Row,
     robot_radius_m: f32,
@@ -100,18 +100,16 @@ struct GoalJson<'a> {
     trail: Vec<[f64; 2]>,
 }
 
-/// Writes `result.json` in `out`: each row with the robot's radius, the clearance preference,
+/// The goals of `result.json`: each row with the robot's radius, the clearance preference,
 /// the clearance of the trail it drove and the trail itself (in the scenario's frame: a ROS
-/// map's, or metres from the top-left corner, y down).
-fn write_result(
-    out: &std::path::Path,
+/// map's, or metres from the top-left corner, y down). `legs[k]`: goal `k + 1`'s trail.
+pub fn result_goals<'a>(
     prep: &Prepared,
-    rows: &[Row],
+    rows: &'a [Row],
     legs: &[Vec<Point>],
-) -> Result<()> {
+) -> Vec<GoalJson<'a>> {
     let raw = prep.scenario.map.grid();
-    let goals_json: Vec<GoalJson<'_>> = rows
-        .iter()
+    rows.iter()
         .map(|row| {
             let trail = &legs[row.goal_index - 1];
             let c = crate::metric::clearance::trail_clearance(&raw, trail);
@@ -127,7 +125,17 @@ fn write_result(
                 trail: trail.iter().map(|&p| prep.scenario.user_frame(p)).collect(),
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Writes `result.json` in `out` ([`result_goals`]).
+fn write_result(
+    out: &std::path::Path,
+    prep: &Prepared,
+    rows: &[Row],
+    legs: &[Vec<Point>],
+) -> Result<()> {
+    let goals_json = result_goals(prep, rows, legs);
     // Written whole, then renamed: a reader never sees half a file.
     let tmp = out.join("result.json.part");
     std::fs::write(&tmp, serde_json::to_string_pretty(&goals_json)?)?;
