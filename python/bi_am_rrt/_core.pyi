@@ -162,6 +162,7 @@ class Planner:
         params: Optional[Dict[str, Any]] = None,
         live_cells: bool = False,
         table: Optional[DiffusionTable] = None,
+        robot_radius: Optional[float] = None,
     ) -> None: ...
     @property
     def name(self) -> str: ...

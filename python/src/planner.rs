@@ -360,8 +360,10 @@ impl Planner {
     /// - `params`: parameter-table values by name (`params()` lists them), e.g.
     ///   `{"e_max": 4.0}`. `live_cells`: a map whose cells `set_cells` may edit.
     /// - `table`: a `DiffusionTable` for the diffusion metric (else one is baked).
+    /// - `robot_radius`: the robot's disc (metres; default: the scenario's, a point on a
+    ///   `Map`): every waypoint keeps the disc clear of the walls and obstacles.
     #[new]
-    #[pyo3(signature = (scenario, planner="tuned", seed=1, nodes=8192, start=None, clock="virtual", t_exp_ms=None, params=None, live_cells=false, table=None))]
+    #[pyo3(signature = (scenario, planner="tuned", seed=1, nodes=8192, start=None, clock="virtual", t_exp_ms=None, params=None, live_cells=false, table=None, robot_radius=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -375,8 +377,16 @@ impl Planner {
         params: Option<&Bound<'_, PyDict>>,
         live_cells: bool,
         table: Option<PyRef<'_, crate::sim::DiffusionTable>>,
+        robot_radius: Option<f64>,
     ) -> PyResult<Self> {
-        let s = scenario_of(scenario, start)?;
+        let mut s = scenario_of(scenario, start)?;
+        if let Some(r) = robot_radius {
+            finite("robot_radius", r)?;
+            s.inner = s
+                .inner
+                .with_robot_radius(r as f32)
+                .map_err(|e| value(format!("{e:#}")))?;
+        }
         let frame = s.frame();
         let start = s.inner.start;
         let mut prep = Prepared::new(s.inner).without_optimum();

@@ -131,6 +131,8 @@ fn exact_optimum(
     let f = s.frame();
     let (pa, pb) = (f.to_planner(point("a", a)?), f.to_planner(point("b", b)?));
     let inner = s.inner;
+    on_free_cell(&inner, "a", a, pa)?;
+    on_free_cell(&inner, "b", b, pb)?;
     let r = py.detach(move || {
         let grid = inner.reach_grid();
         let corners = host_sim::metric::optimum::Corners::of(&grid);
@@ -147,9 +149,28 @@ fn geodesic_distance(map: &Bound<'_, PyAny>, a: Xy, b: Xy) -> PyResult<f64> {
     let s = crate::planner::scenario_of(map, Some(a))?;
     let f = s.frame();
     let (pa, pb) = (f.to_planner(point("a", a)?), f.to_planner(point("b", b)?));
+    on_free_cell(&s.inner, "a", a, pa)?;
+    on_free_cell(&s.inner, "b", b, pb)?;
     let prep = Prepared::new(s.inner);
     let g = host_sim::metric::Geodesic::new(prep.graph(), 2);
     Ok(f64::from(g.distance(pa, pb)))
+}
+
+/// A position in a free cell of the scenario's map (where its robot has room), or the
+/// exception that says why not.
+fn on_free_cell(s: &HsScenario, what: &str, user: Xy, p: Point) -> PyResult<()> {
+    let g = s.reach_grid();
+    match g.cell_of(p) {
+        None => Err(crate::errors::PositionError::new_err(format!(
+            "{what} ({}, {}): position outside the map",
+            user.0, user.1
+        ))),
+        Some((c, r)) if g.is_occupied(c, r) => Err(crate::errors::InWallError::new_err(format!(
+            "{what} ({}, {}): position inside an obstacle (or without room for the robot)",
+            user.0, user.1
+        ))),
+        Some(_) => Ok(()),
+    }
 }
 
 fn clock_kind(clock: &str) -> PyResult<ClockKind> {

@@ -107,3 +107,16 @@ def test_a_diffusion_table_round_trips_and_drives_the_same_run(tmp_path):
     other = b.DiffusionTable.bake(b.Scenario.builtin("maze"))
     with pytest.raises(b.BiAmRrtError, match="table|map"):
         b.Planner(s, table=other)
+
+
+def test_the_optimum_and_the_geodesic_refuse_ends_off_the_map_or_in_walls():
+    a = np.zeros((10, 10), dtype=bool)
+    a[2:10, 5] = True
+    m = b.Map.from_array(a, 1.0)
+    for f in (b.exact_optimum, b.geodesic_distance):
+        with pytest.raises(b.PositionError, match="outside the map"):
+            f(m, (2.0, 8.0), (1e30, 3.0))
+        with pytest.raises(b.InWallError, match="b "):
+            f(m, (2.0, 8.0), (5.5, 5.5))
+        with pytest.raises(ValueError, match="finite"):
+            f(m, (float("nan"), 8.0), (8.0, 8.0))

@@ -410,6 +410,14 @@ impl Corners {
     ) -> Option<(f64, Vec<(f64, f64)>)> {
         let s = (a.x as f64 / self.cell, a.y as f64 / self.cell);
         let g = (b.x as f64 / self.cell, b.y as f64 / self.cell);
+        // An end off the map (or not a number) has no path: refused before a walk along a
+        // segment that long (a point 1e30 m away took for ever, issue 45's bad-input test).
+        let on_map = |p: (f64, f64)| {
+            (0.0..=self.cols as f64).contains(&p.0) && (0.0..=self.rows as f64).contains(&p.1)
+        };
+        if !on_map(s) || !on_map(g) {
+            return None;
+        }
         let dist =
             |p: (f64, f64), q: (f64, f64)| ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt();
         if self.sees(s, g) {
@@ -1277,6 +1285,25 @@ mod tests {
                 "{a:?} -> {b:?}"
             );
         }
+    }
+
+    /// Issue 45: an end 1e30 m off the map made the search walk that segment crossing by
+    /// crossing (for ever, to a user); an end off the map now has no path at once.
+    #[test]
+    fn regression_an_end_off_the_map_has_no_path() {
+        let g = OwnedGrid::from_fn(10, 10, 1.0, |c, r| c == 5 && r > 2).unwrap();
+        let corners = Corners::of(&g.grid());
+        let inside = Point::new(2.5, 8.5);
+        for off in [
+            Point::new(1e30, 3.0),
+            Point::new(-0.5, 3.0),
+            Point::new(3.0, 10.5),
+            Point::new(f32::NAN, 1.0),
+        ] {
+            assert_eq!(corners.shortest(inside, off), None, "{off:?}");
+            assert_eq!(corners.shortest(off, inside), None, "{off:?}");
+        }
+        assert!(corners.shortest(inside, Point::new(8.5, 8.5)).is_some());
     }
 
     #[test]
