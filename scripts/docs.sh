@@ -60,7 +60,7 @@ for s in full-speed pace sigma fig7 fig7-full; do
 done
 p=docs/results/printed
 variants=""
-for v in alg4-take alg6-take alg6-cost alg6-clear all; do
+for v in alg4-take alg6-take alg6-cost alg6-clear alg4-free alg5-gate alg6-clear-outside all; do
   variants="$variants $v=$p/data/$v"
 done
 # shellcheck disable=SC2086

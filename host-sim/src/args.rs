@@ -296,9 +296,12 @@ pub(crate) struct FidelityArgs {
     paper_lengths: bool,
     /// Parts of Algorithms 4-6 and the Meet run exactly as printed instead of this crate's
     /// reading (src/rewire/mod.rs): `all`, `none`, or a comma-separated list of alg4-take
-    /// (Algorithm 4 dequeues x_r2), alg6-take (Algorithm 6 pops x_r2), alg6-cost
-    /// (Algorithm 6's cost test through x_r1), alg6-clear (Algorithm 6's clearing test on
-    /// Second(S)), meet-all-pairs (the Meet tests every pair within sigma).
+    /// (Algorithm 4 dequeues x_r2), alg4-free (Algorithm 4 enqueues only neighbours x_r1
+    /// sees), alg5-gate (Algorithm 5 runs Algorithm 6 only on lists longer than two),
+    /// alg6-take (Algorithm 6 pops x_r2), alg6-cost (Algorithm 6's cost test through x_r1),
+    /// alg6-clear (Algorithm 6's clearing test on Second(S)), alg6-clear-outside (the
+    /// clearing test also after an x_r1 outside the ellipse), meet-all-pairs (the Meet tests
+    /// every pair within sigma).
     #[arg(long, value_name = "PARTS", default_value = "none")]
     as_printed: String,
     /// The reference's rewiring budgets: every expansion spends its full t_root / t_goal

@@ -1406,6 +1406,9 @@ fn docs_results_is_the_report_of_its_data() {
         ("alg6-take", "alg6-take"),
         ("alg6-cost", "alg6-cost"),
         ("alg6-clear", "alg6-clear"),
+        ("alg4-free", "alg4-free"),
+        ("alg5-gate", "alg5-gate"),
+        ("alg6-clear-outside", "alg6-clear-outside"),
         ("all", "all"),
         ("meet-all-pairs", "meet"),
     ]

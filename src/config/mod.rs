@@ -110,6 +110,20 @@ pub struct AsPrinted {
     /// new node whose cheap partners are all behind a wall waits for the next one (issue 24;
     /// measured to make no difference, `docs/results/printed/README.md`).
     pub meet_all_pairs: bool,
+    /// Algorithm 4 enqueues `x_near` only when `FreePath(x_near, x_r1)` (the printed `If`
+    /// holds the enqueue too). Off: every unseen neighbour is enqueued, as the first kind
+    /// enqueues them.
+    pub alg4_free_enqueue: bool,
+    /// Algorithm 5 runs Algorithm 6 only while `len(Q) > 2` or `len(S) > 2`, and Algorithm 6
+    /// takes `x_r1` and `x_r2` from the stack when `len(S) > 2`, else from the queue; with
+    /// shorter lists the second phase ends (the printed loop idles to its end). Off: the
+    /// second kind also runs on shorter lists (`x_r1` from the stack when it holds more than
+    /// two nodes or the queue fewer than two, `x_r2` then possibly none).
+    pub alg5_gate: bool,
+    /// Algorithm 6's clearing test (`S = []`) follows the ellipse test for every `x_r1`, also
+    /// one outside the ellipse (and the first kind's, as AM-RRT*'s reference runs it). Off:
+    /// a node outside the ellipse is skipped before the test.
+    pub alg6_clear_outside: bool,
 }
 
 impl AsPrinted {
@@ -120,6 +134,9 @@ impl AsPrinted {
         alg6_cost: false,
         alg6_clear: false,
         meet_all_pairs: false,
+        alg4_free_enqueue: false,
+        alg5_gate: false,
+        alg6_clear_outside: false,
     };
     /// Every part as printed.
     pub const ALL: Self = Self {
@@ -128,14 +145,20 @@ impl AsPrinted {
         alg6_cost: true,
         alg6_clear: true,
         meet_all_pairs: true,
+        alg4_free_enqueue: true,
+        alg5_gate: true,
+        alg6_clear_outside: true,
     };
     /// The switches' names, as `host-sim --as-printed` takes them.
-    pub const NAMES: [&'static str; 5] = [
+    pub const NAMES: [&'static str; 8] = [
         "alg4-take",
         "alg6-take",
         "alg6-cost",
         "alg6-clear",
         "meet-all-pairs",
+        "alg4-free",
+        "alg5-gate",
+        "alg6-clear-outside",
     ];
 
     /// Sets the switch named `name` (one of [`AsPrinted::NAMES`]); whether the name is known.
@@ -146,6 +169,9 @@ impl AsPrinted {
             "alg6-cost" => &mut self.alg6_cost,
             "alg6-clear" => &mut self.alg6_clear,
             "meet-all-pairs" => &mut self.meet_all_pairs,
+            "alg4-free" => &mut self.alg4_free_enqueue,
+            "alg5-gate" => &mut self.alg5_gate,
+            "alg6-clear-outside" => &mut self.alg6_clear_outside,
             _ => return false,
         };
         *field = on;

@@ -374,6 +374,9 @@ table! {
     switch "alg6_cost", "as_printed", "", Any, "Algorithm 6's printed cost test (else the new edge's true cost)", as_printed.alg6_cost;
     switch "alg6_clear", "as_printed", "", Any, "Algorithm 6's printed clearing test (else the first kind's)", as_printed.alg6_clear;
     switch "meet_all_pairs", "as_printed", "", Any, "the Meet tests every pair within sigma (else the 16 cheapest)", as_printed.meet_all_pairs;
+    switch "alg4_free", "as_printed", "", Any, "Algorithm 4 enqueues x_near only over a free segment to x_r1 (else every unseen one)", as_printed.alg4_free_enqueue;
+    switch "alg5_gate", "as_printed", "", Any, "Algorithm 5 runs Algorithm 6 only while len(Q) > 2 or len(S) > 2", as_printed.alg5_gate;
+    switch "alg6_clear_outside", "as_printed", "", Any, "the clearing test also after an x_r1 outside the ellipse", as_printed.alg6_clear_outside;
 }
 
 /// Node visits per phase and expansion of the named sets ([`Config::new`]; the paper's pace

@@ -38,11 +38,18 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 Ellipse::new(self.pos(root), goal.pos, goal_cost.length * 1.0001)
             };
             let inside = |p: Point| ellipse.as_ref().is_none_or(|e| e.contains(p));
+            let printed = env.cfg.as_printed;
+            // Algorithm 5 as printed runs Algorithm 6 only while a list holds more than two
+            // nodes; the phase ends otherwise (AsPrinted::alg5_gate).
+            let (s_len, q_len) = (self.goal_stack.len(), self.goal_queue.len());
+            if second_kind && printed.alg5_gate && s_len <= 2 && q_len <= 2 {
+                return;
+            }
             // Pick x_r1, and x_r2 for the second kind.
-            let from_stack = if second_kind {
-                self.goal_stack.len() > 2 || self.goal_queue.len() < 2
-            } else {
-                !self.goal_stack.is_empty()
+            let from_stack = match (second_kind, printed.alg5_gate) {
+                (true, true) => s_len > 2,
+                (true, false) => s_len > 2 || q_len < 2,
+                (false, _) => s_len > 0,
             };
             let x1 = if from_stack {
                 self.goal_stack.pop().or_else(|| self.dequeue_goal())
@@ -52,7 +59,6 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             let Some(x1) = x1 else {
                 continue;
             };
-            let printed = env.cfg.as_printed;
             let x2 = match (second_kind, from_stack, printed.alg6_takes_x_r2) {
                 (false, _, _) => None,
                 (true, true, false) => self.goal_stack.last().copied(),
@@ -62,6 +68,12 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
             };
             let x1_pos = self.pos(x1);
             if !inside(x1_pos) {
+                // As printed, the clearing test follows for this x_r1 too
+                // (AsPrinted::alg6_clear_outside).
+                if printed.alg6_clear_outside {
+                    let d1 = env.metric_to(x1_pos, &to_goal, meter);
+                    self.clear_if_receding(env, &to_goal, second_kind, x1_pos, x2, d1, meter);
+                }
                 continue;
             }
             let d1 = env.metric_to(x1_pos, &to_goal, meter);
@@ -117,25 +129,41 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                     self.tree.unmark(f, Mark::Goal);
                 }
             }
-            let clear = if second_kind && printed.alg6_clear {
-                // len(S) > 1 and d_A(Second(S), goal) > d_A(x_r1, goal) + d_A(x_r1, x_r2).
-                // Second(S): the node under the top (none when the stack holds one or none).
-                let second = self.goal_stack.iter().rev().nth(1).copied();
-                second.is_some_and(|second| {
-                    let slack = match x2 {
-                        Some(x2) => env.metric_to(x1_pos, &env.metric.prepare(self.pos(x2)), meter),
-                        None => 0.0,
-                    };
-                    env.metric_to(self.pos(second), &to_goal, meter) > d1 + slack
-                })
-            } else {
-                self.goal_stack
-                    .last()
-                    .is_some_and(|&top| env.metric_to(self.pos(top), &to_goal, meter) > d1)
-            };
-            if clear {
-                self.goal_stack.clear();
-            }
+            self.clear_if_receding(env, &to_goal, second_kind, x1_pos, x2, d1, meter);
+        }
+    }
+
+    /// The clearing test that ends a visit: the stack (the current branch) is emptied when
+    /// the branch stopped approaching the goal (module docs; `d1` is `d_A(x_r1, goal)`).
+    #[allow(clippy::too_many_arguments)]
+    fn clear_if_receding<M: Metric, C: Clock + ?Sized, const K: usize>(
+        &mut self,
+        env: &Env<'_, '_, M, K>,
+        to_goal: &crate::metric::Prepared,
+        second_kind: bool,
+        x1_pos: Point,
+        x2: Option<NodeId>,
+        d1: f32,
+        meter: &Meter<'_, C>,
+    ) {
+        let clear = if second_kind && env.cfg.as_printed.alg6_clear {
+            // len(S) > 1 and d_A(Second(S), goal) > d_A(x_r1, goal) + d_A(x_r1, x_r2).
+            // Second(S): the node under the top (none when the stack holds one or none).
+            let second = self.goal_stack.iter().rev().nth(1).copied();
+            second.is_some_and(|second| {
+                let slack = match x2 {
+                    Some(x2) => env.metric_to(x1_pos, &env.metric.prepare(self.pos(x2)), meter),
+                    None => 0.0,
+                };
+                env.metric_to(self.pos(second), to_goal, meter) > d1 + slack
+            })
+        } else {
+            self.goal_stack
+                .last()
+                .is_some_and(|&top| env.metric_to(self.pos(top), to_goal, meter) > d1)
+        };
+        if clear {
+            self.goal_stack.clear();
         }
     }
 }

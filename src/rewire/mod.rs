@@ -40,13 +40,21 @@
 //!   Algorithm 6's cost test: the printed `Cost(x_r2) + d_E(x_r1, x_near) + d_E(x_r1, x_r2)`
 //!   (the way through `x_r1`, an upper bound) is replaced by the true cost of the new edge
 //!   `Cost(x_r2) + d_E(x_r2, x_near)`, which accepts more rewires, and the frontier's free
-//!   segment is tested from `x_r1` where the paper has `FreePath(x_near, x_r2)`. (4) The first
-//!   kind skips a node outside the ellipse before the clearing test (the reference runs it).
-//!   (1)-(3) are switches of [`crate::AsPrinted`] (`Config::as_printed`, off in both named
-//!   sets), one per departure: with them on, Algorithms 4 and 6 run as printed (the clearing
-//!   test with "or" read as "and"). Measured one at a time at the paper's pace, 25 seeds
-//!   (`docs/results/printed/README.md`): none moves a path length, search time or node count
-//!   outside seed noise. The goal queue's order was a bug (fixed: first in, first out).
+//!   segment is tested from `x_r1` where the paper has `FreePath(x_near, x_r2)`. (4) A node
+//!   outside the ellipse is skipped before the clearing test, where Algorithm 6 (and
+//!   AM-RRT*'s reference, for the first kind) tests the stack after every `x_r1`. (5)
+//!   Algorithm 4 enqueues `x_near` only over a free segment to `x_r1`; the code enqueues
+//!   every unseen neighbour, as the first kind does. (6) Algorithm 5 runs Algorithm 6 only
+//!   while the queue or the stack holds more than two nodes (and Algorithm 6 then takes from
+//!   the stack only when it holds more than two); the code runs the second kind on shorter
+//!   lists too. Each is a switch of [`crate::AsPrinted`] (`Config::as_printed`, off in both
+//!   named sets): (1) `alg4-take`, (2) `alg6-clear`, (3) `alg6-cost` with `alg6-take` for
+//!   the pop of `x_r2`, (4) `alg6-clear-outside`, (5) `alg4-free`, (6) `alg5-gate`. With all
+//!   of them on (`AsPrinted::ALL`, with the Meet over every pair), Algorithms 4-6 run as
+//!   printed, the clearing test's "or" read as "and" and Algorithm 4's cost test, which can
+//!   never pass as printed, read as the true cost. Measured one at a time at the paper's
+//!   pace, 25 seeds: `docs/results/printed/README.md`. The goal queue's order was a bug
+//!   (fixed: first in, first out).
 //! - **Path shortcuts** (tuned, [`crate::config::Rewiring::path_shortcuts`]; not in the
 //!   paper): a cursor walks the path from the goal towards the root, a few nodes per
 //!   expansion, and offers each node its grandparent as parent (Theta*'s any-angle step, Nash

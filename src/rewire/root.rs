@@ -41,16 +41,23 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
                 _ => x1,
             };
             self.nearby(self.pos(center), radius, &mut near, meter);
+            // Algorithm 4 as printed enqueues x_near only over a free segment to x_r1
+            // (AsPrinted::alg4_free_enqueue).
+            let free_only = center != x1 && env.cfg.as_printed.alg4_free_enqueue;
+            let x1_pos = self.pos(x1);
             for &x_near in near.iter() {
                 // A visit is up to 64 tests (a millisecond on a Cortex-M4F, issue 25): past
-                // the deadline the rest are skipped, the neighbours still queued.
-                if !meter.expired(&slice.deadline) {
+                // the deadline the rest are skipped, the neighbours still queued (with
+                // `free_only`, not queued: untested).
+                let in_time = !meter.expired(&slice.deadline);
+                if in_time {
                     meter.charge(1);
                     self.try_rewire(env, x_near, x1, meter);
                 }
                 // Seen only once queued: a node refused by the full (bounded) queue can still
                 // be queued later in the sweep, from another neighbour.
                 if !self.tree.marked(x_near, Mark::Root)
+                    && (!free_only || (in_time && env.free(self.pos(x_near), x1_pos, meter)))
                     && self.root_queue.push_back(x_near).is_ok()
                 {
                     self.tree.mark(x_near, Mark::Root);

@@ -304,3 +304,138 @@ fn path_shortcuts_straighten_the_path_and_keep_it_free() {
         "the wall is in the way: {after} vs {direct}"
     );
 }
+
+/// Issue 46 (F2): Algorithm 4 as printed enqueues `x_near` only over a free segment to
+/// `x_r1`. On the wall map, `x_r1` (5, 8) sits below the wall and `x_r2` (13, 9) at its end;
+/// `x_near` (12, 12) lies near `x_r2` but behind the wall from `x_r1`.
+#[test]
+fn algorithm_4_as_printed_enqueues_only_neighbours_x_r1_sees() {
+    let bits = wall_end();
+    let map: Map<'_, 1> = Map::new(OccupancyGrid::new(&bits, 20, 20, 1.0).unwrap());
+    let queued_after_one_step = |free_only: bool| {
+        let mut cfg = Config::bi_am_rrt();
+        cfg.as_printed.alg4_free_enqueue = free_only;
+        let env = euclidean_env(&map, &cfg);
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        let mut store = TreeStore::<64, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        store.reset(Point::new(2.0, 2.0));
+        let x1 = store
+            .insert(Point::new(5.0, 8.0), NodeId(0), false)
+            .unwrap();
+        let x2 = store
+            .insert(Point::new(13.0, 9.0), NodeId(0), false)
+            .unwrap();
+        let third = store
+            .insert(Point::new(16.0, 6.0), NodeId(0), false)
+            .unwrap();
+        let behind = store.insert(Point::new(12.0, 12.0), x2, false).unwrap();
+        for id in [NodeId(0), x1, x2, third] {
+            store.tree.mark(id, Mark::Root);
+        }
+        for id in [x1, x2, third] {
+            store.root_queue.push_back(id).unwrap();
+        }
+        let slice = Slice {
+            deadline: Deadline::NEVER,
+            visits: 1,
+        };
+        store.rewire_root(&env, slice, true, &meter);
+        store.tree.validate().unwrap();
+        store.root_queue.iter().any(|&n| n == behind)
+    };
+    assert!(queued_after_one_step(false), "every unseen neighbour");
+    assert!(!queued_after_one_step(true), "behind the wall from x_r1");
+}
+
+/// Issue 46 (F3): Algorithm 5 as printed runs Algorithm 6 only while the stack or the queue
+/// holds more than two nodes. With two on the stack and none queued, the second kind pops
+/// `x_r1` in this crate's reading and does nothing as printed.
+#[test]
+fn algorithm_5_as_printed_runs_the_second_kind_only_on_long_lists() {
+    let run = |gate: bool| {
+        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+        let (map, mut cfg) = open_map(&mut bits);
+        cfg.as_printed.alg5_gate = gate;
+        let env = euclidean_env(&map, &cfg);
+        let clock = FakeClock::new(1);
+        let meter = Meter::new(&clock);
+        let mut store = TreeStore::<64, 16>::new();
+        assert!(store.index.reshape(20.0, 20.0, 2.0));
+        let goal = zigzag(
+            &mut store,
+            &[1.0, 7.0, 9.0, 13.0, 18.0].map(|x| Point::new(x, 10.0)),
+        );
+        for k in 0..5 {
+            store.tree.mark(NodeId(k), Mark::Goal);
+        }
+        for id in [NodeId(1), NodeId(3)] {
+            store.goal_stack.push(id).unwrap();
+        }
+        let target = Target {
+            pos: Point::new(18.0, 10.0),
+            node: Some(goal),
+        };
+        let slice = Slice {
+            deadline: Deadline::NEVER,
+            visits: 1,
+        };
+        store.rewire_goal(&env, &target, slice, true, &meter);
+        store.tree.validate().unwrap();
+        store
+            .goal_stack
+            .iter()
+            .map(|n| n.0)
+            .collect::<heapless::Vec<u16, 8>>()
+    };
+    assert_eq!(run(true)[..], [1, 3], "gated: untouched");
+    assert_ne!(run(false)[..], [1, 3], "this crate's reading: x_r1 popped");
+}
+
+/// Issue 46 (F1): the clearing test follows every `x_r1`, also one outside the ellipse, as
+/// printed. The tree: root (1, 10) - q (7, 10) - p (13, 10) - goal (18, 10) and a branch
+/// x_r1 (9, 14) below q, outside the thin ellipse; the stack `[p, q, x_r1]`. Popped, x_r1
+/// (9.85 m from the goal) leaves q (11 m) on top: the branch recedes.
+#[test]
+fn algorithm_6_as_printed_tests_the_stack_after_a_node_outside_the_ellipse() {
+    for second_kind in [false, true] {
+        let run = |outside: bool| {
+            let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
+            let (map, mut cfg) = open_map(&mut bits);
+            cfg.as_printed.alg6_clear_outside = outside;
+            let env = euclidean_env(&map, &cfg);
+            let clock = FakeClock::new(1);
+            let meter = Meter::new(&clock);
+            let mut store = TreeStore::<64, 16>::new();
+            assert!(store.index.reshape(20.0, 20.0, 2.0));
+            let goal = zigzag(
+                &mut store,
+                &[1.0, 7.0, 13.0, 18.0].map(|x| Point::new(x, 10.0)),
+            );
+            let x1 = store
+                .insert(Point::new(9.0, 14.0), NodeId(1), false)
+                .unwrap();
+            for k in 0..4 {
+                store.tree.mark(NodeId(k), Mark::Goal);
+            }
+            store.tree.mark(x1, Mark::Goal);
+            for id in [NodeId(2), NodeId(1), x1] {
+                store.goal_stack.push(id).unwrap();
+            }
+            let target = Target {
+                pos: Point::new(18.0, 10.0),
+                node: Some(goal),
+            };
+            let slice = Slice {
+                deadline: Deadline::NEVER,
+                visits: 1,
+            };
+            store.rewire_goal(&env, &target, slice, second_kind, &meter);
+            store.tree.validate().unwrap();
+            store.goal_stack.len()
+        };
+        assert_eq!(run(true), 0, "second kind {second_kind}: cleared");
+        assert_eq!(run(false), 2, "second kind {second_kind}: skipped");
+    }
+}

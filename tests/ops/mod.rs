@@ -215,6 +215,9 @@ fn run_with<M: Metric>(
         alg6_cost: third & 64 != 0,
         alg6_clear: third & 128 != 0,
         meet_all_pairs: third & 8 != 0,
+        alg4_free_enqueue: third & 4 != 0,
+        alg5_gate: third & 2 != 0,
+        alg6_clear_outside: third & 1 != 0,
     };
     // A fourth byte: a stated motion (module `motion`), any valid values.
     if b.u8() & 1 != 0 {
