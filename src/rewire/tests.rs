@@ -149,10 +149,17 @@ fn algorithm_4_as_printed_takes_x_r2_out_of_the_queue() {
     assert_eq!(front_after_one_step(true), Some(3), "x_r2 dequeued");
 }
 
-/// One step of Algorithm 6 from the stack `[p, q, x_r1]` (bottom to top) on a straight
-/// tree `root (1) - q (7) - x_r1 (9) - p (13) - goal (18)` along `y = 10`, every node
-/// already seen (no frontier): what is left on the stack.
-fn goal_stack_after_one_step(printed: AsPrinted) -> heapless::Vec<u16, 8> {
+/// One visit of goal rewiring (the second kind, Algorithm 6, or the first) on an open map:
+/// the tree is the straight chain `chain` from the root (every node already seen), plus an
+/// optional branch node hung below a chain node; `stack` (bottom to top, node ids, the
+/// branch's id next after the chain's) is the goal stack. Returns what is left on the stack.
+fn goal_stack_after_a_visit(
+    printed: AsPrinted,
+    chain: &[Point],
+    branch: Option<(Point, u16)>,
+    stack: &[u16],
+    second_kind: bool,
+) -> heapless::Vec<u16, 8> {
     let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
     let (map, mut cfg) = open_map(&mut bits);
     cfg.as_printed = printed;
@@ -161,28 +168,34 @@ fn goal_stack_after_one_step(printed: AsPrinted) -> heapless::Vec<u16, 8> {
     let meter = Meter::new(&clock);
     let mut store = TreeStore::<64, 16>::new();
     assert!(store.index.reshape(20.0, 20.0, 2.0));
-    let goal = zigzag(
-        &mut store,
-        &[1.0, 7.0, 9.0, 13.0, 18.0].map(|x| Point::new(x, 10.0)),
-    );
-    for k in 0..5 {
-        store.tree.mark(NodeId(k), Mark::Goal);
+    let goal = zigzag(&mut store, chain);
+    if let Some((at, below)) = branch {
+        store.insert(at, NodeId(below), false).unwrap();
     }
-    let (q, x1, p) = (NodeId(1), NodeId(2), NodeId(3));
-    for id in [p, q, x1] {
-        store.goal_stack.push(id).unwrap();
+    for id in store.tree.ids().collect::<heapless::Vec<NodeId, 64>>() {
+        store.tree.mark(id, Mark::Goal);
+    }
+    for &id in stack {
+        store.goal_stack.push(NodeId(id)).unwrap();
     }
     let target = Target {
-        pos: Point::new(18.0, 10.0),
+        pos: store.pos(goal),
         node: Some(goal),
     };
     let slice = Slice {
         deadline: Deadline::NEVER,
         visits: 1,
     };
-    store.rewire_goal(&env, &target, slice, true, &meter);
+    store.rewire_goal(&env, &target, slice, second_kind, &meter);
     store.tree.validate().unwrap();
     store.goal_stack.iter().map(|n| n.0).collect()
+}
+
+/// One step of Algorithm 6 from the stack `[p, q, x_r1]` (bottom to top) on a straight
+/// tree `root (1) - q (7) - x_r1 (9) - p (13) - goal (18)` along `y = 10`.
+fn goal_stack_after_one_step(printed: AsPrinted) -> heapless::Vec<u16, 8> {
+    let chain = [1.0, 7.0, 9.0, 13.0, 18.0].map(|x| Point::new(x, 10.0));
+    goal_stack_after_a_visit(printed, &chain, None, &[3, 1, 2], true)
 }
 
 #[test]
@@ -355,39 +368,10 @@ fn algorithm_4_as_printed_enqueues_only_neighbours_x_r1_sees() {
 #[test]
 fn algorithm_5_as_printed_runs_the_second_kind_only_on_long_lists() {
     let run = |gate: bool| {
-        let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
-        let (map, mut cfg) = open_map(&mut bits);
-        cfg.as_printed.alg5_gate = gate;
-        let env = euclidean_env(&map, &cfg);
-        let clock = FakeClock::new(1);
-        let meter = Meter::new(&clock);
-        let mut store = TreeStore::<64, 16>::new();
-        assert!(store.index.reshape(20.0, 20.0, 2.0));
-        let goal = zigzag(
-            &mut store,
-            &[1.0, 7.0, 9.0, 13.0, 18.0].map(|x| Point::new(x, 10.0)),
-        );
-        for k in 0..5 {
-            store.tree.mark(NodeId(k), Mark::Goal);
-        }
-        for id in [NodeId(1), NodeId(3)] {
-            store.goal_stack.push(id).unwrap();
-        }
-        let target = Target {
-            pos: Point::new(18.0, 10.0),
-            node: Some(goal),
-        };
-        let slice = Slice {
-            deadline: Deadline::NEVER,
-            visits: 1,
-        };
-        store.rewire_goal(&env, &target, slice, true, &meter);
-        store.tree.validate().unwrap();
-        store
-            .goal_stack
-            .iter()
-            .map(|n| n.0)
-            .collect::<heapless::Vec<u16, 8>>()
+        let mut printed = AsPrinted::NONE;
+        printed.alg5_gate = gate;
+        let chain = [1.0, 7.0, 9.0, 13.0, 18.0].map(|x| Point::new(x, 10.0));
+        goal_stack_after_a_visit(printed, &chain, None, &[1, 3], true)
     };
     assert_eq!(run(true)[..], [1, 3], "gated: untouched");
     assert_ne!(run(false)[..], [1, 3], "this crate's reading: x_r1 popped");
@@ -399,41 +383,13 @@ fn algorithm_5_as_printed_runs_the_second_kind_only_on_long_lists() {
 /// (9.85 m from the goal) leaves q (11 m) on top: the branch recedes.
 #[test]
 fn algorithm_6_as_printed_tests_the_stack_after_a_node_outside_the_ellipse() {
+    let chain = [1.0, 7.0, 13.0, 18.0].map(|x| Point::new(x, 10.0));
     for second_kind in [false, true] {
         let run = |outside: bool| {
-            let mut bits = [0u8; OccupancyGrid::bytes_needed(20, 20)];
-            let (map, mut cfg) = open_map(&mut bits);
-            cfg.as_printed.alg6_clear_outside = outside;
-            let env = euclidean_env(&map, &cfg);
-            let clock = FakeClock::new(1);
-            let meter = Meter::new(&clock);
-            let mut store = TreeStore::<64, 16>::new();
-            assert!(store.index.reshape(20.0, 20.0, 2.0));
-            let goal = zigzag(
-                &mut store,
-                &[1.0, 7.0, 13.0, 18.0].map(|x| Point::new(x, 10.0)),
-            );
-            let x1 = store
-                .insert(Point::new(9.0, 14.0), NodeId(1), false)
-                .unwrap();
-            for k in 0..4 {
-                store.tree.mark(NodeId(k), Mark::Goal);
-            }
-            store.tree.mark(x1, Mark::Goal);
-            for id in [NodeId(2), NodeId(1), x1] {
-                store.goal_stack.push(id).unwrap();
-            }
-            let target = Target {
-                pos: Point::new(18.0, 10.0),
-                node: Some(goal),
-            };
-            let slice = Slice {
-                deadline: Deadline::NEVER,
-                visits: 1,
-            };
-            store.rewire_goal(&env, &target, slice, second_kind, &meter);
-            store.tree.validate().unwrap();
-            store.goal_stack.len()
+            let mut printed = AsPrinted::NONE;
+            printed.alg6_clear_outside = outside;
+            let branch = Some((Point::new(9.0, 14.0), 1));
+            goal_stack_after_a_visit(printed, &chain, branch, &[2, 1, 4], second_kind).len()
         };
         assert_eq!(run(true), 0, "second kind {second_kind}: cleared");
         assert_eq!(run(false), 2, "second kind {second_kind}: skipped");
