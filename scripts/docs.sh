@@ -49,7 +49,7 @@ fi
 mkdir -p "$out/reference"
 "$sim" cli-reference >"$out/reference/cli.md"
 
-for s in full-speed pace sigma fig7 fig7-full; do
+for s in full-speed pace sigma fig7 fig7-full fig7-reference fig10 fig10-hold; do
   d=docs/results/$s
   "$sim" report --results "$d/data" --out "$out/results/$s/README.md" --notes "$d/notes.md" \
     >/dev/null
@@ -66,10 +66,15 @@ done
 # shellcheck disable=SC2086
 "$sim" compare --base "$p/data/none" $variants "meet-all-pairs=$p/data/meet" \
   --out "$out/results/printed/README.md" --notes "$p/notes.md" >/dev/null
+# The reference's wait rule at the paper's pace, against the pace folder.
+"$sim" compare --base docs/results/pace/data wait-from-set=docs/results/pace/wait-from-set \
+  --out "$out/results/pace/wait-from-set.md" --notes docs/results/pace/wait-from-set-notes.md >/dev/null
 if [ "$check" = 1 ]; then
   sed -i "s|$out/results/printed|$p|g" "$out/results/printed/README.md"
+  sed -i "s|$out/results/pace|docs/results/pace|g" "$out/results/pace/wait-from-set.md"
   stale=0
-  for f in configuration.md reference/cli.md results/{full-speed,pace,sigma,fig7,fig7-full,printed}/README.md; do
+  for f in configuration.md reference/cli.md results/{full-speed,pace,sigma,fig7,fig7-full,fig7-reference,fig10,fig10-hold,printed}/README.md \
+    results/pace/wait-from-set.md; do
     if ! diff -q "docs/$f" "$out/$f" >/dev/null; then
       echo "docs/$f is stale: run scripts/docs.sh"
       stale=1

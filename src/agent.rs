@@ -6,7 +6,9 @@
 //! 3. *search time* is the time until the goal joined the forward tree (read by the planner at
 //!    that moment, not at the end of the call);
 //! 4. the agent starts moving once the goal is in the tree and `wait` has passed, then moves
-//!    `speed` metres towards the current waypoint per call (stopping on it when closer);
+//!    `speed` metres towards the current waypoint per call (stopping on it when closer; with
+//!    [`Protocol::move_when_blocked`], the AM-RRT* reference's rule, an agent whose path is
+//!    blocked drives on along it);
 //! 5. every motion segment is checked against the live cells and the dynamic obstacles where
 //!    they are, by exact distances rather than the planner's own test ([`Map::body_clear`]):
 //!    a segment along which the robot's disc (a point without a body) comes nearer an
@@ -45,6 +47,16 @@ pub struct Protocol {
     pub max_calls: u32,
     /// End the run after the call in which the goal joined the tree (search time only).
     pub stop_when_found: bool,
+    /// The AM-RRT* reference's agent rule (Figs. 7 and 10 as the papers ran them): when the
+    /// forward tree's path to the goal becomes blocked (its cost crosses an obstacle), the
+    /// agent drives on along that path as it stood then (its root and the next [`AHEAD`] - 1
+    /// nodes), whatever its blocked flags, instead of moving to `plan`'s waypoint, until it
+    /// stands clear of every obstacle with the tree's path free again (or is past those
+    /// nodes); then it moves to the waypoint again. Every segment
+    /// that is not clear counts as a collision. The planner itself is unchanged (it re-roots
+    /// at an agent it cannot reach), so the protocol keeps the path. Off (this crate's rule,
+    /// promise 1): the agent moves to the waypoint, and holds where none is clear.
+    pub move_when_blocked: bool,
 }
 
 impl Default for Protocol {
@@ -55,6 +67,7 @@ impl Default for Protocol {
             wait_from_set: false,
             max_calls: 3_000,
             stop_when_found: false,
+            move_when_blocked: false,
         }
     }
 }
@@ -109,6 +122,8 @@ where
     planner.set_goal(goal)?;
     let wait = clock.ticks(protocol.wait);
     let mut res = RunResult::default();
+    // The reference's rule: the path kept when it became blocked, while it stays blocked.
+    let mut ahead: Option<Ahead> = None;
     for call in 0..protocol.max_calls {
         let p = planner.plan(clock, agent)?;
         res.calls = call.saturating_add(1);
@@ -125,7 +140,20 @@ where
                 if res.cost_at_start.is_none() {
                     res.cost_at_start = p.goal_cost.map(|c| c.length);
                 }
-                let step = agent.step_towards(p.waypoint, protocol.speed);
+                // Blocked: the tree's path crosses an obstacle; or the agent, driving along
+                // the kept path, is inside one (the planner then has no path from it).
+                let blocked = p.goal_cost.is_some_and(|c| c.blocked)
+                    || (ahead.is_some() && !planner.map().body_clear(agent, agent));
+                let target = if protocol.move_when_blocked && blocked {
+                    ahead
+                        .get_or_insert_with(|| Ahead::of(planner))
+                        .next(agent)
+                        .unwrap_or(p.waypoint)
+                } else {
+                    ahead = None;
+                    p.waypoint
+                };
+                let step = agent.step_towards(target, protocol.speed);
                 if !planner.map().body_clear(agent, step) {
                     res.collisions = res.collisions.saturating_add(1);
                 }
@@ -143,4 +171,89 @@ where
         }
     }
     Ok(res)
+}
+
+/// Nodes of a path the reference's agent keeps ([`Protocol::move_when_blocked`]), at least
+/// `e_max / 8` apart: at least 8 `e_max` of path, far past an obstacle that blocks it.
+pub const AHEAD: usize = 64;
+
+/// The first [`AHEAD`] nodes of the forward tree's path to the goal, its root first, and how
+/// many the agent has passed.
+#[derive(Clone, Copy, Debug)]
+struct Ahead {
+    points: [Point; AHEAD],
+    len: usize,
+    passed: usize,
+}
+
+impl Default for Ahead {
+    fn default() -> Self {
+        Self {
+            points: [Point::ZERO; AHEAD],
+            len: 0,
+            passed: 0,
+        }
+    }
+}
+
+impl Ahead {
+    /// The path's nodes from the root, nearest first (at most one step per tree node).
+    fn of<M, R, const N: usize, const B: usize, const K: usize>(
+        planner: &Planner<'_, '_, M, R, N, B, K>,
+    ) -> Self
+    where
+        M: Metric,
+        R: Rng,
+    {
+        let tree = planner.tree();
+        let mut a = Self::default();
+        let Some(mut node) = planner.goal_node() else {
+            return a;
+        };
+        let gap = planner.config().search.e_max / 8.0;
+        // Walking up from the goal to the root, the last AHEAD nodes met (goal side first),
+        // each at least `gap` from the one kept before it (the root always kept).
+        for _ in 0..=tree.len() {
+            let Some(p) = tree.position(node) else {
+                break;
+            };
+            let last = a.len.checked_sub(1).and_then(|i| a.points.get(i));
+            let root = tree.parent(node).is_none();
+            if !root && last.is_some_and(|q| q.dist(p) < gap) {
+                node = tree.parent(node).unwrap_or(node);
+                continue;
+            }
+            if a.len < AHEAD {
+                if let Some(slot) = a.points.get_mut(a.len) {
+                    *slot = p;
+                }
+                a.len = a.len.saturating_add(1);
+            } else {
+                a.points.rotate_left(1);
+                if let Some(slot) = a.points.last_mut() {
+                    *slot = p;
+                }
+            }
+            match tree.parent(node) {
+                Some(up) => node = up,
+                None => break,
+            }
+        }
+        // The root first.
+        if let Some(path) = a.points.get_mut(..a.len) {
+            path.reverse();
+        }
+        a
+    }
+
+    /// The point to drive to from `agent`: the first one not yet reached.
+    fn next(&mut self, agent: Point) -> Option<Point> {
+        while self.passed < self.len && self.points.get(self.passed) == Some(&agent) {
+            self.passed = self.passed.saturating_add(1);
+        }
+        self.points
+            .get(self.passed)
+            .filter(|_| self.passed < self.len)
+            .copied()
+    }
 }

@@ -614,3 +614,78 @@ fn both_search_definitions_and_both_waits() {
         "{from_set:?} vs {from_join:?}"
     );
 }
+
+/// Issue 46 (F5): the expansion cap counts each tree's expansion, as Algorithm 1 runs
+/// `Expend_f` and `Expend_r` one after the other, each with its own rewiring. A two-tree
+/// planner under a cap of 20 grows each tree 10 times; a one-tree planner grows its one 20
+/// times.
+#[test]
+fn the_expansion_cap_counts_each_tree() {
+    let s = &builtin::MAZE;
+    for (cfg, trees) in [(Config::bi_am_rrt(), 2u64), (Config::am_rrt(), 1)] {
+        let mut cfg = cfg;
+        cfg.budget.max_expansions = 20;
+        let mut storage = Box::new(Storage::<N, B>::new());
+        let mut p = planner_on(&mut storage, s, Euclidean, cfg, 3);
+        p.set_goal(s.goals[0]).unwrap();
+        // A clock that never advances: only the cap ends the call.
+        let frozen = bi_am_rrt::clock::FakeClock::nanos();
+        let pr = p.plan(&frozen, s.start).unwrap();
+        assert!(!pr.goal_in_tree, "the goal joined in the first call");
+        let st = *p.stats();
+        assert_eq!(pr.expansions, 20, "{trees} tree(s): {pr:?}");
+        assert_eq!(st.expansions + st.reverse_expansions, 20);
+        assert_eq!(st.reverse_expansions, if trees == 2 { 10 } else { 0 });
+    }
+}
+
+/// Issue 46 (F6): the reference's agent rule (`Protocol::move_when_blocked`). In a 4 m wide
+/// corridor a disc that spans it drops ahead of the moving agent: with this crate's rule the
+/// agent holds (no collision, promise 1; the goal stays out of reach), with the reference's
+/// it drives on along the blocked path through the disc to the goal, and the protocol counts
+/// the collisions.
+#[test]
+fn the_reference_agent_rule_drives_into_a_dropped_disc() {
+    let (cols, rows, cell) = (80, 8, 0.5);
+    let mut bits = vec![0u8; bi_am_rrt::OccupancyGrid::bytes_needed(cols, rows)];
+    bi_am_rrt::map::pack_grid(&mut bits, cols, rows, |_, _| false).unwrap();
+    let grid = bi_am_rrt::OccupancyGrid::new(&bits, cols, rows, cell).unwrap();
+    let (start, goal) = (Point::new(2.0, 2.0), Point::new(38.0, 2.0));
+    for move_when_blocked in [false, true] {
+        for seed in 1..=3 {
+            let mut cfg = Config::am_rrt().for_grid(&grid);
+            cfg.budget.t_exp = Duration::from_millis(5);
+            let mut storage = Box::new(Storage::<N, B>::new());
+            let mut p: Planner<'_, '_, _, _, N, B, K> = Planner::new(
+                &mut storage,
+                Map::new(grid),
+                Euclidean,
+                XorShiftRng::seed_from_u64(seed),
+                cfg,
+                start,
+            )
+            .unwrap();
+            let proto = Protocol {
+                move_when_blocked,
+                max_calls: 150,
+                ..Protocol::default()
+            };
+            let mut dropped = false;
+            let r = bi_am_rrt::agent::run_to_goal(&mut p, &clock(), goal, &proto, |p, agent, _| {
+                if !dropped && agent.x > 6.0 {
+                    let disc = Circle::new(Point::new(agent.x + 4.0, 2.0), 2.5);
+                    dropped = p.add_obstacle(disc).is_ok();
+                }
+            })
+            .unwrap();
+            assert!(dropped, "seed {seed}: no disc dropped");
+            if move_when_blocked {
+                // Through the disc, along the path it blocked, to the goal.
+                assert!(r.collisions > 0 && r.reached, "seed {seed}: {r:?}");
+            } else {
+                assert_eq!(r.collisions, 0, "seed {seed}: the holding agent collided");
+                assert!(!r.reached, "seed {seed}: reached through the disc");
+            }
+        }
+    }
+}

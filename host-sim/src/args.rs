@@ -309,8 +309,9 @@ pub(crate) struct FidelityArgs {
     #[arg(long)]
     faithful: bool,
     /// Work per call: `full` (as much as t_exp allows here) or `paper` (the paper's pace:
-    /// 20 expansions and 8 rewiring visits per phase and expansion, every call lasting its
-    /// full t_exp on the virtual clock; needs --clock virtual).
+    /// 20 tree expansions, each tree's counting, and 8 rewiring visits per phase and
+    /// expansion, every call lasting its full t_exp on the virtual clock; needs --clock
+    /// virtual).
     #[arg(long, value_enum, default_value = "full")]
     pace: host_sim::results::Pace,
 }

@@ -79,6 +79,7 @@ fn base_args(scenarios: Vec<scenario::Scenario>, planners: &str, out: &Path) -> 
         jobs: Some(2),
         faithful: false,
         wait_from_set: false,
+        move_when_blocked: false,
         pace: host_sim::results::Pace::Full,
         no_optimum: false,
         as_printed: bi_am_rrt::AsPrinted::NONE,
@@ -1376,8 +1377,18 @@ fn every_parameter_is_an_override() {
 fn docs_results_is_the_report_of_its_data() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let results = root.join("docs").join("results");
-    // Full speed, the paper's pace, its sigma study, Fig. 7 at the pace and at full speed.
-    for study in ["full-speed", "pace", "sigma", "fig7", "fig7-full"] {
+    // Full speed, the paper's pace, its sigma study, Fig. 7 at the pace (the hold rule and
+    // the reference's agent rule) and at full speed, Fig. 10 (both rules).
+    for study in [
+        "full-speed",
+        "pace",
+        "sigma",
+        "fig7",
+        "fig7-full",
+        "fig7-reference",
+        "fig10",
+        "fig10-hold",
+    ] {
         let here = results.join(study);
         let notes = std::fs::read_to_string(here.join("notes.md")).unwrap();
         let dir = tempfile::tempdir().unwrap();
@@ -1439,6 +1450,25 @@ fn docs_results_is_the_report_of_its_data() {
     assert!(
         made == committed,
         "docs/results/printed/README.md is stale: regenerate it with {command}"
+    );
+    // The reference's wait rule at the paper's pace (docs/results/pace/wait-from-set.md).
+    let pace = results.join("pace");
+    let command = "host-sim compare --base docs/results/pace/data \
+                   wait-from-set=docs/results/pace/wait-from-set \
+                   --out docs/results/pace/wait-from-set.md \
+                   --notes docs/results/pace/wait-from-set-notes.md";
+    let out = dir.path().join("wait-from-set.md");
+    let variants = [("wait-from-set".to_string(), pace.join("wait-from-set"))];
+    let notes = std::fs::read_to_string(pace.join("wait-from-set-notes.md")).unwrap();
+    host_sim::study::report::compare(&pace.join("data"), &variants, &out, command, Some(&notes))
+        .unwrap();
+    let made = std::fs::read_to_string(&out)
+        .unwrap()
+        .replace(&pace.display().to_string(), "docs/results/pace");
+    let committed = std::fs::read_to_string(pace.join("wait-from-set.md")).unwrap();
+    assert!(
+        made == committed,
+        "docs/results/pace/wait-from-set.md is stale: regenerate it with {command}"
     );
 }
 

@@ -366,6 +366,7 @@ fn experiment<'py>(
         jobs,
         faithful: false,
         wait_from_set: false,
+        move_when_blocked: false,
         pace: pace_of(pace)?,
         no_optimum: !optimum,
         as_printed: bi_am_rrt::AsPrinted::default(),

@@ -251,8 +251,10 @@ pub struct Rewiring {
 pub struct Budget {
     /// `t_exp`: expansion time per `plan` call.
     pub t_exp: Duration,
-    /// Hard cap on expansions per call, whatever the clock says (a frozen clock still gives
-    /// bounded calls).
+    /// Hard cap on tree expansions per call, whatever the clock says (a frozen clock still
+    /// gives bounded calls). Each tree's expansion counts, so a step that grows both trees
+    /// counts two (Algorithm 1 calls `Expend` once per tree, each with its rewiring); the
+    /// count may end one over the cap, as a step is not split.
     pub max_expansions: u32,
     /// Hard cap on the work of one call, in work units (one grid cell tested, node visited
     /// or metric evaluated; about 12 ns each on the development machine and about 200

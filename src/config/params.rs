@@ -341,7 +341,7 @@ table! {
     real "root_step", "rewiring", "m", NonNegative, "longest step of the root along the path; 0: to the next node (the paper)", rewiring.root_step;
     // Budget.
     millis "t_exp", "budget", "ms", NonZero, "expansion time per plan call (Table 2)", budget.t_exp;
-    count32 "max_expansions", "budget", "", AtLeastOne, "hard cap on expansions per call, whatever the clock", budget.max_expansions;
+    count32 "max_expansions", "budget", "", AtLeastOne, "hard cap on tree expansions per call (each tree counts), whatever the clock", budget.max_expansions;
     count32 "max_work", "budget", "", AtLeastOne, "hard cap on a call's work units, whatever the clock", budget.max_work;
     count32 "clock_every", "budget", "", Any, "work units between two clock readings; 0: at every check", budget.clock_every;
     count32 "clock_every_max", "budget", "", Any, "above clock_every: readings paced by their cost up to this far apart", budget.clock_every_max;

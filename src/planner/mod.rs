@@ -244,7 +244,7 @@ pub struct Progress {
     pub nodes: usize,
     /// Reverse tree size (0 when not in use).
     pub reverse_nodes: usize,
-    /// Expansions done in this call.
+    /// Tree expansions done in this call (a step that grows both trees counts two).
     pub expansions: u32,
     /// Whether the root moved along the path in this call.
     pub advanced: bool,

@@ -177,8 +177,21 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         };
         while expansions < self.cfg.budget.max_expansions && !meter.expired(&steps) {
             let joined = self.goal_node().is_some();
+            // Each tree's expansion counts (Algorithm 1 runs `Expend_f` and then `Expend_r`,
+            // each with its own rewiring): a step that grows both trees counts two, so one-
+            // and two-tree planners get the same growth from a cap. A step is never split:
+            // the count may end one over the cap.
+            let before = self
+                .stats
+                .expansions
+                .saturating_add(self.stats.reverse_expansions);
             self.step(meter, steps);
-            expansions = expansions.saturating_add(1);
+            let grown = self
+                .stats
+                .expansions
+                .saturating_add(self.stats.reverse_expansions)
+                .saturating_sub(before);
+            expansions = expansions.saturating_add(grown.clamp(1, 2) as u32);
             if let Some(agent) = follow
                 && !*advanced
                 && !joined

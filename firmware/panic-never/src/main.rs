@@ -17,7 +17,7 @@ use bi_am_rrt::index::SpatialIndex;
 use bi_am_rrt::map::{ObstacleId, OccupancyGrid, pack_grid};
 use bi_am_rrt::metric::{DiffusionTable, ElementKind, TableHeader, write_table};
 use bi_am_rrt::tree::{NodeId, Tree};
-use bi_am_rrt::{Circle, Config, Euclidean, Map, Metric, Motion, Moving, Planner, Point, Storage};
+use bi_am_rrt::{Circle, Euclidean, Map, Metric, Motion, Moving, Planner, Point, Storage};
 use cortex_m_rt::entry;
 #[cfg(feature = "check")]
 use panic_never as _;

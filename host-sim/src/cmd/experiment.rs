@@ -64,6 +64,12 @@ pub struct Cmd {
     /// benchmark does (default: from when the goal joins the tree).
     #[arg(long)]
     wait_from_set: bool,
+    /// The AM-RRT* reference's agent rule (Figs. 7 and 10 as the papers ran them): the agent
+    /// moves along the tree's path to the goal whatever its blocked flags, and every
+    /// segment that is not clear counts as a collision (default: the agent moves to the
+    /// planner's waypoint, and holds when none is clear, promise 1).
+    #[arg(long)]
+    move_when_blocked: bool,
     /// Skip each leg's exact optimum (`optimal_m` and `travelled_ratio` stay empty): on maps
     /// with tens of thousands of obstacle corners it can take long.
     #[arg(long)]
@@ -100,6 +106,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
         overwrite,
         out,
         wait_from_set,
+        move_when_blocked,
         no_optimum,
         meet_all_pairs,
         obstacle,
@@ -110,6 +117,7 @@ pub fn main(cmd: Cmd) -> Result<()> {
     }
     experiment::run(&ExperimentArgs {
         wait_from_set,
+        move_when_blocked,
         pace: fidelity.pace(),
         no_optimum,
         as_printed: fidelity.as_printed()?,

@@ -31,6 +31,10 @@ use crate::results::stats::Spread;
 use crate::scenario::Scenario;
 use crate::sim::clock::ClockKind;
 
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
 /// The manifest's file name.
 pub const MANIFEST: &str = "experiment.json";
 /// The rows' file name.
@@ -53,7 +57,8 @@ pub enum Pace {
     /// As much as `t_exp` allows on this implementation (over a thousand expansions).
     #[default]
     Full,
-    /// The paper's pace: 20 expansions a call and 8 rewiring visits per phase and expansion
+    /// The paper's pace: 20 tree expansions a call (each tree's count, so a two-tree planner
+    /// grows each tree about half as often) and 8 rewiring visits per phase and expansion
     /// (`sim::PAPER_EXPANSIONS_PER_CALL`, `sim::PAPER_VISITS`), every call lasting its full
     /// `t_exp` on the virtual clock, as a call of the paper's Python did.
     Paper,
@@ -122,6 +127,10 @@ pub struct Settings {
     /// instead of from the join (absent in folders made before issue 24: false).
     #[serde(default)]
     pub wait_from_set: bool,
+    /// The reference's agent rule (`--move-when-blocked`): the agent moves along the tree's
+    /// path whatever its blocked flags (absent, and not written, when off).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub move_when_blocked: bool,
     /// Work per call (absent in folders made before issue 24: full).
     #[serde(default)]
     pub pace: Pace,

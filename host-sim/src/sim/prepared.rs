@@ -623,7 +623,7 @@ pub fn narrow_warning(
     )
 }
 
-/// The paper's pace (`--pace paper`): [`PAPER_EXPANSIONS_PER_CALL`] expansions per call and
+/// The paper's pace (`--pace paper`): [`PAPER_EXPANSIONS_PER_CALL`] tree expansions per call and
 /// [`PAPER_VISITS`] rewiring visits per phase and expansion (the caller makes every call last
 /// its full `t_exp` on a virtual clock).
 pub fn paper_pace(c: &mut Config) {
@@ -633,11 +633,18 @@ pub fn paper_pace(c: &mut Config) {
     };
 }
 
-/// Expansions per `plan` call at the paper's pace: Table 2's budgets spend `t_root + t_goal`
-/// (5-6 ms) of rewiring after every expansion, so a 150 ms call of the paper's implementation
-/// held at most about 150 / (6 + 1) = 21 expansions (1 ms for the expansion itself is an
-/// assumption). The paper's own counts at goal on bug_trap (AM-RRT*(D) 76 nodes, RT-RRT* 445,
-/// AM-RRT*(E) 1,062) are what `docs/results/pace/README.md` compares against.
+/// Tree expansions per `plan` call at the paper's pace. Each tree's expansion counts
+/// (`Budget::max_expansions`): Algorithm 1's loop calls `Expend_f` and, until the trees meet,
+/// `Expend_r`, and every `Expend` spends its own `t_root` of root rewiring (Algorithm 3's
+/// timed loop), so a 150 ms call of the paper's implementation was shared by the expansions
+/// of both trees, and a two-tree planner grew each tree about half as often as a one-tree
+/// planner grew its one. After the join an `Expend_f` spends `t_root + t_goal` (Table 2: 2 + 4
+/// ms for the AM-RRT* family, 3 + 3 ms for RT-RRT*) and, with about 1 ms for the expansion
+/// itself (an assumption), a call held 150 / (6 + 1) = 21 of them. Before the join an
+/// `Expend` costs 3-4 ms, so a call held more (37-50); one cap for both phases is the simpler
+/// model and the slower one before the join, for one- and two-tree planners alike. The
+/// paper's own counts at goal on bug_trap (AM-RRT*(D) 76 nodes, RT-RRT* 445, AM-RRT*(E)
+/// 1,062) are what `docs/results/pace/README.md` compares against.
 pub const PAPER_EXPANSIONS_PER_CALL: u32 = 20;
 
 /// Rewiring visits per phase and expansion at the paper's pace: 2-4 ms of Python at an

@@ -63,6 +63,8 @@ pub struct ExperimentArgs {
     pub faithful: bool,
     /// The agent's wait counted from when the goal is set (`--wait-from-set`).
     pub wait_from_set: bool,
+    /// The reference's agent rule (`--move-when-blocked`, `Protocol::move_when_blocked`).
+    pub move_when_blocked: bool,
     /// Work per call (`--pace`).
     pub pace: crate::results::Pace,
     /// Skip each leg's exact optimum (`--no-optimum`: `optimal_m` and `travelled_ratio` empty).
@@ -127,6 +129,7 @@ pub fn settings(args: &ExperimentArgs) -> Result<Settings> {
         goals: args.goals,
         faithful: args.faithful,
         wait_from_set: args.wait_from_set,
+        move_when_blocked: args.move_when_blocked,
         pace: args.pace,
         as_printed: as_printed_names(args.as_printed),
         meet_all_pairs: args.meet_all_pairs,
@@ -160,6 +163,7 @@ pub fn one_run(
     let protocol = Protocol {
         stop_when_found: args.search_only,
         wait_from_set: args.wait_from_set,
+        move_when_blocked: args.move_when_blocked,
         ..Protocol::default()
     };
     // Fig. 7: a disc dropped on goal 1's path (the first goal driven).

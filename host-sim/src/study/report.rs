@@ -97,7 +97,11 @@ struct Cell {
     /// Runs in which goal 1 joined the tree (all a `--search-only` run measures).
     found: usize,
     collisions: u32,
+    /// Search time read at the end of the call in which the goal joined (the reference's
+    /// definition, the primary figure; the join instant for rows made before issue 24).
     search_s: Vec<f64>,
+    /// The instant the goal joined the forward tree.
+    join_s: Vec<f64>,
     path_m: Vec<f64>,
     ratio: Vec<f64>,
     nodes: Vec<f64>,
@@ -107,6 +111,8 @@ struct Cell {
     replan_s: Vec<f64>,
     /// Fig. 7: travelled from the drop / the exact optimum around the disc.
     detour: Vec<f64>,
+    /// Collisions of each run.
+    collisions_per_run: Vec<f64>,
 }
 
 impl Cell {
@@ -117,7 +123,11 @@ impl Cell {
             reached: reached.len(),
             found: rows.iter().filter(|r| r.search_time_s.is_some()).count(),
             collisions: rows.iter().map(|r| r.collisions).sum(),
-            search_s: rows.iter().filter_map(|r| r.search_time_s).collect(),
+            search_s: rows
+                .iter()
+                .filter_map(|r| r.search_time_call_end_s.or(r.search_time_s))
+                .collect(),
+            join_s: rows.iter().filter_map(|r| r.search_time_s).collect(),
             path_m: reached
                 .iter()
                 .filter_map(|r| r.path_length_m.map(f64::from))
@@ -135,6 +145,7 @@ impl Cell {
                 .filter_map(|r| r.nodes_at_call_end.map(|n| n as f64))
                 .collect(),
             replan_s: rows.iter().filter_map(|r| r.replan_s).collect(),
+            collisions_per_run: rows.iter().map(|r| f64::from(r.collisions)).collect(),
             detour: rows
                 .iter()
                 .filter_map(|r| {
@@ -144,25 +155,32 @@ impl Cell {
         }
     }
 
-    /// The sample a notes quote names (`search`, `path`, `ratio`, `nodes`, `nodes_end`,
-    /// `replan`, `detour`).
+    /// The sample a notes quote names (`search`, `join`, `path`, `ratio`, `nodes`,
+    /// `nodes_end`, `replan`, `detour`).
     fn measure(&self, name: &str) -> Result<&[f64]> {
         Ok(match name {
             "search" => &self.search_s,
+            "join" => &self.join_s,
             "path" => &self.path_m,
             "ratio" => &self.ratio,
             "nodes" => &self.nodes,
             "nodes_end" => &self.nodes_end,
             "replan" => &self.replan_s,
             "detour" => &self.detour,
+            "collisions" => &self.collisions_per_run,
             _ => anyhow::bail!(
-                "measure {name:?}: search, path, ratio, nodes, nodes_end, replan or detour"
+                "measure {name:?}: search, join, path, ratio, nodes, nodes_end, replan, detour \
+                 or collisions"
             ),
         })
     }
 
     fn search_mean(&self) -> Option<f64> {
         mean(&self.search_s)
+    }
+
+    fn join_mean(&self) -> Option<f64> {
+        mean(&self.join_s)
     }
 
     fn path_mean(&self) -> Option<f64> {
@@ -176,8 +194,8 @@ fn show_measure(name: &str, v: Option<f64>) -> String {
     match (name, v) {
         (_, None) => "-".to_string(),
         ("ratio" | "detour", Some(v)) => format!("{v:.3}"),
-        ("nodes" | "nodes_end", Some(v)) => format!("{v:.0}"),
-        ("search" | "replan", Some(v)) => num(v * 1e3),
+        ("nodes" | "nodes_end" | "collisions", Some(v)) => format!("{v:.0}"),
+        ("search" | "join" | "replan", Some(v)) => num(v * 1e3),
         (_, Some(v)) => num(v),
     }
 }
@@ -353,20 +371,28 @@ struct Page<'a> {
 
 impl Page<'_> {
     /// The goal-1 rows of planner `p` on map `m`.
+    /// The goal-1 runs of planner `p` (`*`: every planner) on map `m`.
     fn cell(&self, p: &str, m: &str) -> Cell {
         let rs: Vec<&Row> = self
             .goal1
             .iter()
-            .filter(|r| r.planner == p && r.scenario == m)
+            .filter(|r| (p == "*" || r.planner == p) && r.scenario == m)
             .copied()
             .collect();
         Cell::of(&rs)
     }
 }
 
-/// A scheme's change on one map: (scheme, map, search change, path change, the originals of
-/// the complete pairs).
-type SchemeChange = (Scheme, String, Option<f64>, Option<f64>, Vec<String>);
+/// A scheme's change on one map: the scheme, the map, the changes of the mean search time
+/// (call end), of the mean join instant and of the mean path, and the originals averaged.
+type SchemeChange = (
+    Scheme,
+    String,
+    Option<f64>,
+    Option<f64>,
+    Option<f64>,
+    Vec<String>,
+);
 
 /// Fig. 6: one chart per scheme (each original against its modified planner), and each
 /// scheme's change of the means per map.
@@ -457,26 +483,30 @@ fn fig6_charts(page: &Page<'_>, charts: &mut Vec<PathBuf>) -> Result<Vec<SchemeC
         for m in maps {
             // Only complete pairs: both planners with a mean search time and path length.
             let mut ds = Vec::new();
+            let mut dj = Vec::new();
             let mut dp = Vec::new();
             let mut used = Vec::new();
             for (o, p) in &pairs {
                 let (co, cp) = (cell(o, m), cell(p, m));
-                let (s, l) = (
+                let (s, j, l) = (
                     change(co.search_mean(), cp.search_mean()),
+                    change(co.join_mean(), cp.join_mean()),
                     change(co.path_mean(), cp.path_mean()),
                 );
-                if let (Some(s), Some(l)) = (s, l) {
+                if let (Some(s), Some(j), Some(l)) = (s, j, l) {
                     ds.push(s);
+                    dj.push(j);
                     dp.push(l);
                     used.push(o.clone());
                 } else if settings.search_only
-                    && let Some(s) = s
+                    && let (Some(s), Some(j)) = (s, j)
                 {
                     ds.push(s);
+                    dj.push(j);
                     used.push(o.clone());
                 }
             }
-            scheme_changes.push((sch, m.clone(), mean(&ds), mean(&dp), used));
+            scheme_changes.push((sch, m.clone(), mean(&ds), mean(&dj), mean(&dp), used));
         }
     }
     Ok(scheme_changes)
@@ -551,19 +581,22 @@ fn fig6_claims(
         md,
         "Change of the modified planner against its original (mean search time, mean path \
          length), averaged over the pairs named in the last column (the complete pairs: both \
-         planners in the folder with a mean), per map. The paper's figures are from its text \
-         (Section 5.2).\n"
+         planners in the folder with a mean), per map. Search time is read at the end of the \
+         `plan` call in which the goal joined the forward tree, as the reference reads it; \
+         the join instant is beside it. The paper's figures are from its text (Section \
+         5.2).\n"
     );
     let _ = writeln!(
         md,
-        "| scheme | map | search time | path length | averaged over (originals) |\n|---|---|---:|---:|---|"
+        "| scheme | map | search time | join instant | path length | averaged over (originals) |\n|---|---|---:|---:|---:|---|"
     );
-    for (sch, m, ds, dp, used) in scheme_changes {
+    for (sch, m, ds, dj, dp, used) in scheme_changes {
         let _ = writeln!(
             md,
-            "| {} | {m} | {} | {} | {} |",
+            "| {} | {m} | {} | {} | {} | {} |",
             sch.label(),
             pct(*ds),
+            pct(*dj),
             pct(*dp),
             if used.is_empty() {
                 "none".to_string()
@@ -598,8 +631,9 @@ fn planner_tables(page: &Page<'_>, md: &mut String) {
     let _ = writeln!(md, "\n## Every planner, per map (goal 1)\n");
     let _ = writeln!(
         md,
-        "Search time: goal set until the goal joins the forward tree, on the run's clock. Path: \
-         travelled by the agent. Change: mean against the planner's original (Table 1 row 1), \
+        "Search time: goal set until the end of the `plan` call in which the goal joined the \
+         forward tree, on the run's clock (the reference's definition); joined: the instant \
+         it joined, within that call. Path: travelled by the agent. Change: mean against the planner's original (Table 1 row 1), \
          with the two-sided Mann-Whitney p-value of the two samples (seeds): p above 0.05, the \
          change is within seed noise.\n"
     );
@@ -615,9 +649,9 @@ fn planner_tables(page: &Page<'_>, md: &mut String) {
         );
         let _ = writeln!(
             md,
-            "| planner | {} | search ms, median [IQR] | search ms, mean | path m, mean | \
-             travelled / optimal, median [IQR] | nodes at goal, median | change: search | \
-             change: path |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+            "| planner | {} | search ms, median [IQR] | search ms, mean | joined ms, median | \
+             path m, mean | travelled / optimal, median [IQR] | nodes at goal, median | \
+             change: search | change: path |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
             // A --search-only run stops when the goal joins: it counts goals found.
             if settings.search_only {
                 "found"
@@ -634,7 +668,7 @@ fn planner_tables(page: &Page<'_>, md: &mut String) {
                 .map(|(_, o)| cell(&o, m));
             let _ = writeln!(
                 md,
-                "| {p} | {}/{}{} | {} [{}, {}] | {} | {} | {} [{}, {}] | {} | {} | {} |",
+                "| {p} | {}/{}{} | {} [{}, {}] | {} | {} | {} | {} [{}, {}] | {} | {} | {} |",
                 if settings.search_only {
                     c.found
                 } else {
@@ -650,6 +684,7 @@ fn planner_tables(page: &Page<'_>, md: &mut String) {
                 opt(s.q1, 1e3),
                 opt(s.q3, 1e3),
                 opt(s.mean, 1e3),
+                opt(Spread::of(c.join_s.clone()).median, 1e3),
                 opt(c.path_mean(), 1.0),
                 r.median.map_or("-".into(), |v| format!("{v:.3}")),
                 r.q1.map_or("-".into(), |v| format!("{v:.3}")),
@@ -712,12 +747,13 @@ fn resolve_note(page: &Page<'_>, scheme_changes: &[SchemeChange], args: &[&str])
     };
     if *stat == "pairs" {
         // {{pairs|MEASURE|SCHEME}}: over every planner pair of the scheme on every
-        // map, how many changes of the mean are below zero, and the span of their p.
+        // map, how many changes of the mean are below zero, how many pairs differ outside
+        // seed noise (p < 0.05), and the span of their p.
         let [label] = rest else {
             anyhow::bail!("expected pairs|MEASURE|-1, -2 or bi");
         };
         let sch = scheme_of(label)?;
-        let (mut below, mut all, mut ps) = (0, 0, Vec::new());
+        let (mut below, mut all, mut ps) = (0, 0, Vec::<f64>::new());
         for m in maps {
             for p in planners {
                 let Some((s, o)) = scheme(p) else { continue };
@@ -740,36 +776,46 @@ fn resolve_note(page: &Page<'_>, scheme_changes: &[SchemeChange], args: &[&str])
         } else {
             format!("Mann-Whitney p {lo:.2}-{hi:.2}")
         };
+        let outside = ps.iter().filter(|&&p| p < 0.05).count();
         return Ok(format!(
-            "{below} of the {all} planner-map pairs below zero ({span})"
+            "{below} of the {all} planner-map pairs below zero, {outside} with p < 0.05 ({span})"
         ));
     }
     if *stat == "scheme" {
         let [label, map] = rest else {
-            anyhow::bail!("expected scheme|search or path|-1, -2 or bi|MAP");
+            anyhow::bail!("expected scheme|search, join or path|-1, -2 or bi|MAP");
         };
         let sch = scheme_of(label)?;
-        let (_, _, ds, dp, _) = scheme_changes
+        let (_, _, ds, dj, dp, _) = scheme_changes
             .iter()
             .find(|(s, m, ..)| *s == sch && m == map)
             .with_context(|| format!("no scheme {label} on {map:?} in this folder"))?;
         return Ok(pct(match *measure {
             "search" => *ds,
+            "join" => *dj,
             "path" => *dp,
-            _ => anyhow::bail!("scheme changes are of search or path"),
+            _ => anyhow::bail!("scheme changes are of search, join or path"),
         }));
     }
     let [planner, map] = rest else {
         anyhow::bail!("expected {stat}|{measure}|PLANNER|MAP");
     };
     anyhow::ensure!(
-        planners.iter().any(|p| p == planner) && maps.iter().any(|m| m == map),
-        "no planner {planner:?} on map {map:?} in this folder"
+        (*planner == "*" || planners.iter().any(|p| p == planner)) && maps.iter().any(|m| m == map),
+        "no planner {planner:?} on map {map:?} in this folder (`*`: every planner)"
     );
     let c = cell(planner, map);
     let sample = c.measure(measure)?;
     let fmt = |v: Option<f64>| show_measure(measure, v);
     match *stat {
+        // {{sum|MEASURE|PLANNER|MAP}}: the sample's total (e.g. collisions);
+        // {{nonzero|...}}: the runs with a value other than zero, "K of N".
+        "sum" => Ok(fmt(Some(sample.iter().sum()))),
+        "nonzero" => Ok(format!(
+            "{} of {}",
+            sample.iter().filter(|&&v| v != 0.0).count(),
+            sample.len()
+        )),
         "mean" => Ok(fmt(mean(sample))),
         "median" => Ok(fmt(Spread::of(sample.to_vec()).median)),
         "max" => Ok(fmt(sample.iter().copied().reduce(f64::max))),
@@ -781,7 +827,7 @@ fn resolve_note(page: &Page<'_>, scheme_changes: &[SchemeChange], args: &[&str])
             let os = o.measure(measure)?;
             Ok(pct_p(change(mean(os), mean(sample)), os, sample))
         }
-        _ => anyhow::bail!("statistic {stat:?}: mean, median, max, change or scheme"),
+        _ => anyhow::bail!("statistic {stat:?}: sum, nonzero, mean, median, max, change or scheme"),
     }
 }
 
@@ -821,7 +867,7 @@ fn table3(manifest: &Manifest, md: &mut String) {
 /// `base`, run with the same matrix and settings but for one switch each. Per planner and
 /// map, over goal 1: the base's mean, and each variant's change of the mean with the
 /// Mann-Whitney p of the two samples (bold below 0.05), for travelled path length, search
-/// time and nodes at goal. Settings that differ from the base's are listed per variant.
+/// time (to the end of the joining call), the join instant and nodes at goal. Settings that differ from the base's are listed per variant.
 pub fn compare(
     base: &Path,
     variants: &[(String, PathBuf)],
@@ -919,15 +965,21 @@ pub fn compare(
         .map(|s| s.name.as_str())
         .collect();
     type Pick = fn(&Cell) -> &Vec<f64>;
-    let measures: [(&str, &str, f64, Pick); 3] = [
+    let measures: [(&str, &str, f64, Pick); 4] = [
         ("Travelled path length", "m", 1.0, |c| &c.path_m),
-        ("Search time", "ms", 1e3, |c| &c.search_s),
+        (
+            "Search time (to the end of the call in which the goal joined)",
+            "ms",
+            1e3,
+            |c| &c.search_s,
+        ),
+        ("Join instant", "ms", 1e3, |c| &c.join_s),
         ("Nodes at goal", "nodes", 1.0, |c| &c.nodes),
     ];
     if let Some(n) = notes {
         // {{change|MEASURE|VARIANT|PLANNER|MAP}}, {{minp|MEASURE|VARIANT}} (the smallest p
         // over every planner and map, with that change), {{range|MEASURE|VARIANT}} (the
-        // changes' span); MEASURE: path, search or nodes.
+        // changes' span); MEASURE: path, search, join or nodes.
         let resolve = |args: &[&str]| -> Result<String> {
             let [stat, measure, variant, rest @ ..] = args else {
                 anyhow::bail!("expected STAT|MEASURE|VARIANT|...");
@@ -935,8 +987,9 @@ pub fn compare(
             let pick: Pick = match *measure {
                 "path" => |c| &c.path_m,
                 "search" => |c| &c.search_s,
+                "join" => |c| &c.join_s,
                 "nodes" => |c| &c.nodes,
-                _ => anyhow::bail!("measure {measure:?}: path, search or nodes"),
+                _ => anyhow::bail!("measure {measure:?}: path, search, join or nodes"),
             };
             let (_, _, vrows) = vs
                 .iter()
