@@ -142,9 +142,10 @@ where
                 }
                 // Blocked: the tree's path crosses an obstacle; or the agent, driving along
                 // the kept path, is inside one (the planner then has no path from it).
-                let blocked = p.goal_cost.is_some_and(|c| c.blocked)
-                    || (ahead.is_some() && !planner.map().body_clear(agent, agent));
-                let target = if protocol.move_when_blocked && blocked {
+                let blocked = protocol.move_when_blocked
+                    && (p.goal_cost.is_some_and(|c| c.blocked)
+                        || (ahead.is_some() && !planner.map().body_clear(agent, agent)));
+                let target = if blocked {
                     ahead
                         .get_or_insert_with(|| Ahead::of(planner))
                         .next(agent)
