@@ -49,13 +49,14 @@ pub struct Protocol {
     pub stop_when_found: bool,
     /// The AM-RRT* reference's agent rule (Figs. 7 and 10 as the papers ran them): when the
     /// forward tree's path to the goal becomes blocked (its cost crosses an obstacle), the
-    /// agent drives on along that path as it stood then (its root and the next [`AHEAD`] - 1
-    /// nodes), whatever its blocked flags, instead of moving to `plan`'s waypoint, until it
-    /// stands clear of every obstacle with the tree's path free again (or is past those
-    /// nodes); then it moves to the waypoint again. Every segment
-    /// that is not clear counts as a collision. The planner itself is unchanged (it re-roots
-    /// at an agent it cannot reach), so the protocol keeps the path. Off (this crate's rule,
-    /// promise 1): the agent moves to the waypoint, and holds where none is clear.
+    /// agent drives on along that path as it stood then (its root and up to [`AHEAD`] - 1 of
+    /// its nodes, `e_max / 8` apart at least), whatever its blocked flags, instead of moving
+    /// to `plan`'s waypoint, until it stands clear of every obstacle with the tree's path
+    /// free again (or is past those nodes); then it moves to the waypoint again. Every
+    /// segment that is not clear counts as a collision. The planner itself is unchanged (it
+    /// re-roots at an agent it cannot reach), so the protocol keeps the path. Off (this
+    /// crate's rule, promise 1): the agent moves to the waypoint, and holds where none is
+    /// clear.
     pub move_when_blocked: bool,
 }
 
@@ -219,12 +220,10 @@ impl Ahead {
                 break;
             };
             let last = a.len.checked_sub(1).and_then(|i| a.points.get(i));
-            let root = tree.parent(node).is_none();
-            if !root && last.is_some_and(|q| q.dist(p) < gap) {
-                node = tree.parent(node).unwrap_or(node);
-                continue;
-            }
-            if a.len < AHEAD {
+            let up = tree.parent(node);
+            if up.is_some() && last.is_some_and(|q| q.dist(p) < gap) {
+                // Too near the node kept before it.
+            } else if a.len < AHEAD {
                 if let Some(slot) = a.points.get_mut(a.len) {
                     *slot = p;
                 }
@@ -235,7 +234,7 @@ impl Ahead {
                     *slot = p;
                 }
             }
-            match tree.parent(node) {
+            match up {
                 Some(up) => node = up,
                 None => break,
             }
