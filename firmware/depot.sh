@@ -8,7 +8,7 @@
 #
 # Fails when a goal is missed, a collision or a panic happens, a call overruns t_exp by more
 # than 1 ms, or the firmware leaves the flash (256 KiB) or RAM (96 KiB) budget. Writes
-# docs/firmware-depot.txt (docs/guides/firmware.md quotes it after `<!-- docs/firmware-depot.txt -->`);
+# docs/results/firmware/depot.txt (docs/guides/firmware.md quotes it after `<!-- docs/results/firmware/depot.txt -->`);
 # --check compares instead of writing (`.ci/run` does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,7 +19,7 @@ LLVM_SIZE=$(find "$(rustc --print sysroot)" -name llvm-size -type f | head -n 1)
 export BIAMRRT_FLASH_DIR="$PWD/target/flash-depot"
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf --features firmware-example)
 elf=target/thumbv7em-none-eabihf/firmware/examples/firmware
-doc=docs/firmware-depot.txt
+doc=docs/results/firmware/depot.txt
 out=target/firmware-depot.txt
 : >"$out"
 for set in paper tuned; do
@@ -56,10 +56,10 @@ for set in paper tuned; do
 done
 if [ "$check" = 1 ]; then
   if ! diff -u "$doc" "$out"; then
-    echo "the depot firmware's figures changed: run firmware/depot.sh and copy $doc into the block of docs/guides/firmware.md after <!-- docs/firmware-depot.txt -->"
+    echo "the depot firmware's figures changed: run firmware/depot.sh and copy $doc into the block of docs/guides/firmware.md after <!-- docs/results/firmware/depot.txt -->"
     exit 1
   fi
-  awk '/^<!-- docs\/firmware-depot.txt -->$/ { on = 1; next }
+  awk '/^<!-- docs\/results\/firmware\/depot.txt -->$/ { on = 1; next }
     on && /^```text$/ { next }
     on && /^```$/ { exit }
     on { print }' docs/guides/firmware.md | diff -u "$doc" -

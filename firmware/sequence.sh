@@ -5,15 +5,15 @@
 #
 #   firmware/sequence.sh [--check] [--hw-sqrt | --m0 | --riscv] [--robot-radius R]
 #
-# Writes docs/firmware-sequence.txt (docs/guides/firmware.md's table quotes it); with --hw-sqrt (nightly Rust, the
-# FPU's square root: feature `hw-sqrt`) docs/firmware-sequence-hw-sqrt.txt; with --m0 the
+# Writes docs/results/firmware/sequence.txt (docs/guides/firmware.md's table quotes it); with --hw-sqrt (nightly Rust, the
+# FPU's square root: feature `hw-sqrt`) docs/results/firmware/sequence-hw-sqrt.txt; with --m0 the
 # Cortex-M0+ build (firmware/m0-twin's `office`: soft float, SysTick at 25 MHz on QEMU's
-# mps2-an385, the same 8 ns an instruction) docs/firmware-sequence-m0.txt; with --riscv the
+# mps2-an385, the same 8 ns an instruction) docs/results/firmware/sequence-m0.txt; with --riscv the
 # RISC-V build (firmware/riscv-twin's `office`: riscv32imac, soft float, the `time` counter at
-# 10 MHz on QEMU's virt board) docs/firmware-sequence-riscv.txt. --check compares instead of
+# 10 MHz on QEMU's virt board) docs/results/firmware/sequence-riscv.txt. --check compares instead of
 # writing. `.ci/run` runs all four with FIRMWARE_SEQUENCE=1. With --robot-radius R (metres) the
 # office is exported for a robot of that radius (issue 41: its inflated grid in flash beside
-# the map) and the figures go to docs/firmware-sequence-body-R.txt (the M4F build).
+# the map) and the figures go to docs/results/firmware/sequence-body-R.txt (the M4F build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source firmware/paths.sh
@@ -36,20 +36,20 @@ done
 export BIAMRRT_FLASH_DIR="$PWD/target/flash"
 args=(--profile firmware --example firmware --target thumbv7em-none-eabihf)
 cargo=(cargo)
-doc=docs/firmware-sequence.txt
+doc=docs/results/firmware/sequence.txt
 dir=.
 if [ "$hw" = 1 ]; then
   cargo=(cargo +nightly)
   args+=(--features firmware-example,hw-sqrt)
-  doc=docs/firmware-sequence-hw-sqrt.txt
+  doc=docs/results/firmware/sequence-hw-sqrt.txt
 elif [ "$m0" = 1 ]; then
   dir=firmware/m0-twin
   args=(--release --bin office)
-  doc=docs/firmware-sequence-m0.txt
+  doc=docs/results/firmware/sequence-m0.txt
 elif [ "$rv" = 1 ]; then
   dir=firmware/riscv-twin
   args=(--release --bin office)
-  doc=docs/firmware-sequence-riscv.txt
+  doc=docs/results/firmware/sequence-riscv.txt
 else
   args+=(--features firmware-example)
 fi

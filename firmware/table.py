@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The firmware guide's table (docs/guides/firmware.md), from the figures `firmware/sequence.sh` wrote to
-docs/firmware-sequence*.txt (one row per target and set). Prints it; with --check, compares it
+docs/results/firmware/sequence*.txt (one row per target and set). Prints it; with --check, compares it
 with the guide's table (between `<!-- firmware-table -->` and the next blank line) and exits 1
 when they differ; with --write, replaces it."""
 import re
@@ -9,11 +9,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGETS = [
-    ("Cortex-M4F", "docs/firmware-sequence.txt"),
-    ("Cortex-M4F, `hw-sqrt`", "docs/firmware-sequence-hw-sqrt.txt"),
-    ("Cortex-M0+ (soft float)", "docs/firmware-sequence-m0.txt"),
-    ("RISC-V riscv32imac (soft float)", "docs/firmware-sequence-riscv.txt"),
-    ("Cortex-M4F, a 0.3 m robot", "docs/firmware-sequence-body-0.3.txt"),
+    ("Cortex-M4F", "docs/results/firmware/sequence.txt"),
+    ("Cortex-M4F, `hw-sqrt`", "docs/results/firmware/sequence-hw-sqrt.txt"),
+    ("Cortex-M0+ (soft float)", "docs/results/firmware/sequence-m0.txt"),
+    ("RISC-V riscv32imac (soft float)", "docs/results/firmware/sequence-riscv.txt"),
+    ("Cortex-M4F, a 0.3 m robot", "docs/results/firmware/sequence-body-0.3.txt"),
 ]
 SUMMARY = re.compile(
     r"\): (\d+)/(\d+) goals reached, path ([\d.]+) m, (\d+) plan calls, \d+ expansions "
@@ -51,7 +51,7 @@ def main():
     end = text.index("\n\n", start) + 1
     if "--check" in sys.argv:
         if text[start:end] != want:
-            sys.stderr.write("docs/guides/firmware.md's firmware table differs from docs/firmware-sequence*.txt:\n")
+            sys.stderr.write("docs/guides/firmware.md's firmware table differs from docs/results/firmware/sequence*.txt:\n")
             sys.stderr.write(want)
             sys.exit(1)
     elif "--write" in sys.argv:

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The robot-body figures of docs/body-figures.md (issue 41): every map of ../shared/maps,
+# The robot-body figures of docs/results/body/README.md (issue 41): every map of ../shared/maps,
 # ../shared/maps/real and ../shared/maps/external with a point and discs of 0.2 and 0.3 m.
 #
 #   scripts/body-figures.sh [--seeds N]     (default 10 seeds for the bench; about 20 minutes)
@@ -21,7 +21,7 @@ if [ "${1:-}" = --seeds ]; then seeds=$2; fi
 bin=target/release/host-sim
 cargo build --release -p host-sim >/dev/null 2>&1
 test -x target/ompl/rrt_connect || benches/ompl/build.sh
-out=docs/body-figures.md
+out=docs/results/body/README.md
 tmp=$(mktemp -d)
 maps=(
   "../shared/maps/scenarios.toml bug_trap"

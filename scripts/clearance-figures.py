@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The clearance-preference figures of docs/clearance-figures.md (issue 41).
+"""The clearance-preference figures of docs/results/clearance/README.md (issue 41).
 
     scripts/clearance-figures.py [--seeds N]     (default 5 seeds; about 5 minutes)
 
@@ -27,7 +27,7 @@ SCENARIOS = ROOT / ".." / "shared" / "maps" / "real" / "scenarios.toml"
 MAPS = ["depot", "warehouse"]
 RADIUS = 0.2
 SETTINGS = [(None, None), (0.3, 1.0), (0.3, 4.0), (0.6, 1.0), (0.6, 4.0)]
-OUT = ROOT / "docs" / "clearance-figures.md"
+OUT = ROOT / "docs" / "results" / "clearance" / "README.md"
 
 
 def run(scenario, seed, margin, weight, out):

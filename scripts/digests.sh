@@ -9,7 +9,7 @@
 #
 # - twin: the host twin line (`cargo run --release --example twin`), which the firmware,
 #   the M0+ and the RISC-V twins must print too (CI checks that);
-# - firmware-office: docs/firmware-office.txt, which CI regenerates under QEMU and diffs;
+# - firmware-office: docs/results/firmware/office.txt, which CI regenerates under QEMU and diffs;
 # - experiment: all 20 planners on bug_trap, maze and office, one seed, virtual clock
 #   (runs.csv without run_wall_s);
 # - bench: every leg of the shared scenarios, two seeds, virtual clock (bench.csv);
@@ -29,7 +29,7 @@ fi
 digest() { sha256sum | cut -c1-16; }
 
 echo "twin $(cargo run --release --quiet --example twin | digest)"
-echo "firmware-office $(digest <docs/firmware-office.txt)"
+echo "firmware-office $(digest <docs/results/firmware/office.txt)"
 "$sim" bench --planners paper --scenarios "$scen" --clock virtual --seeds 2 --no-grid --out "$out/bench" >/dev/null
 echo "bench $(digest <"$out/bench/bench.csv")"
 "$sim" moving --kinds door --seeds 2 --out "$out/moving" >/dev/null

@@ -12,14 +12,14 @@
 # check the same in `cargo test`).
 #
 # --firmware also flies the firmware under QEMU and rewrites what it measured (about 30-60
-# minutes): docs/firmware-depot.txt (firmware/depot.sh), the office sequences of every target
+# minutes): docs/results/firmware/depot.txt (firmware/depot.sh), the office sequences of every target
 # (firmware/sequence.sh and its --hw-sqrt, --m0, --riscv and --robot-radius 0.3 forms) and
-# the firmware guide's table (firmware/table.py --write). docs/firmware-office.txt and the
-# board's size table in docs/board.md are the CI run's (`.ci/run` prints what to copy when
+# the firmware guide's table (firmware/table.py --write). docs/results/firmware/office.txt and the
+# board's size table in docs/guides/board.md are the CI run's (`.ci/run` prints what to copy when
 # they differ).
 #
-# Not regenerated here: docs/body-figures.md (scripts/body-figures.sh) and
-# docs/clearance-figures.md (scripts/clearance-figures.py), runs of minutes each with their
+# Not regenerated here: docs/results/body/README.md (scripts/body-figures.sh) and
+# docs/results/clearance/README.md (scripts/clearance-figures.py), runs of minutes each with their
 # own scripts, and the lab notebook, which records measurements as they were made.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,8 +45,8 @@ if [ "$check" = 1 ]; then
   done
 fi
 
-"$sim" params >"$out/configuration.md"
 mkdir -p "$out/reference"
+"$sim" params >"$out/reference/configuration.md"
 "$sim" cli-reference >"$out/reference/cli.md"
 
 for s in full-speed pace sigma fig7 fig7-full fig7-reference fig10 fig10-hold; do
@@ -73,7 +73,7 @@ if [ "$check" = 1 ]; then
   sed -i "s|$out/results/printed|$p|g" "$out/results/printed/README.md"
   sed -i "s|$out/results/pace|docs/results/pace|g" "$out/results/pace/wait-from-set.md"
   stale=0
-  for f in configuration.md reference/cli.md results/{full-speed,pace,sigma,fig7,fig7-full,fig7-reference,fig10,fig10-hold,printed}/README.md \
+  for f in reference/configuration.md reference/cli.md results/{full-speed,pace,sigma,fig7,fig7-full,fig7-reference,fig10,fig10-hold,printed}/README.md \
     results/pace/wait-from-set.md; do
     if ! diff -q "docs/$f" "$out/$f" >/dev/null; then
       echo "docs/$f is stale: run scripts/docs.sh"
@@ -83,7 +83,7 @@ if [ "$check" = 1 ]; then
   [ "$stale" = 0 ] && echo "the generated pages of docs/ are current"
   exit "$stale"
 fi
-echo "regenerated docs/configuration.md, docs/reference/cli.md and docs/results/*/README.md"
+echo "regenerated docs/reference/configuration.md, docs/reference/cli.md and docs/results/*/README.md"
 
 if [ "$firmware" = 1 ]; then
   firmware/depot.sh

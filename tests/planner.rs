@@ -360,7 +360,7 @@ fn regression_storage_fits_4096_nodes_in_96_kib() {
         per_tree(s1024, 1024),
         "the fixed part grows with N"
     );
-    // The office firmware's stack high-water mark is about 5 KiB (docs/firmware-office.txt; CI
+    // The office firmware's stack high-water mark is about 5 KiB (docs/results/firmware/office.txt; CI
     // checks the real total against 96 KiB).
     assert!(
         s2048 + 6 * 1024 <= 96 * 1024,

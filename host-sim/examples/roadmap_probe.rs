@@ -20,7 +20,7 @@
 //! at the scale of M metres, at least 2 cells (the occupied cells within it span less than A
 //! degrees).
 //! `--cold` flushes the caches before each query (as `bench --cold`) and times it alone.
-//! Findings: docs/performance.md, "A baked roadmap".
+//! Findings: docs/notebook/first-solution.md, "A baked roadmap".
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};

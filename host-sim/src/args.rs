@@ -40,7 +40,7 @@ pub(crate) struct BodyArgs {
     #[arg(long)]
     snap_to_room: bool,
     /// Prefer paths that keep this many metres beyond the robot's body where the space
-    /// allows (a cost that rises near walls, as nav2's inflation layer: see docs/body.md;
+    /// allows (a cost that rises near walls, as nav2's inflation layer: see docs/guides/body.md;
     /// default: none, every edge costs its length).
     #[arg(long, value_name = "METRES")]
     clearance_margin: Option<f32>,

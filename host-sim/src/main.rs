@@ -72,7 +72,7 @@ enum Command {
     /// Measure wall nanoseconds per unit of planner work (to calibrate the virtual clock).
     Calibrate(cmd::calibrate::Cmd),
     /// The configuration reference: every value a `NAME@field=value` override sets, with its
-    /// unit, rule, the paper's and the tuned value (Markdown; docs/configuration.md).
+    /// unit, rule, the paper's and the tuned value (Markdown; docs/reference/configuration.md).
     Params(cmd::params::Cmd),
     /// The command-line reference: every command's help, as Markdown
     /// (docs/reference/cli.md).

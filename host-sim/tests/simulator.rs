@@ -1309,15 +1309,15 @@ fn one_planner_syntax_with_one_default() {
     );
 }
 
-/// docs/configuration.md is the parameter table as `host-sim params` prints it (regenerate:
-/// `cargo run -p host-sim -- params > docs/configuration.md`).
+/// docs/reference/configuration.md is the parameter table as `host-sim params` prints it (regenerate:
+/// `cargo run -p host-sim -- params > docs/reference/configuration.md`).
 #[test]
 fn docs_configuration_is_the_parameter_table() {
-    let page = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/configuration.md");
+    let page = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/reference/configuration.md");
     let committed = std::fs::read_to_string(&page).unwrap();
     assert!(
         committed == host_sim::sim::planners::reference(),
-        "docs/configuration.md is stale: cargo run -p host-sim -- params > docs/configuration.md"
+        "docs/reference/configuration.md is stale: cargo run -p host-sim -- params > docs/reference/configuration.md"
     );
 }
 
@@ -1470,6 +1470,20 @@ fn docs_results_is_the_report_of_its_data() {
         made == committed,
         "docs/results/pace/wait-from-set.md is stale: regenerate it with {command}"
     );
+    // The moving obstacles' studies (docs/results/moving and its door maze): their summary
+    // tables are the report's of their runs.csv (the report adds its chart below them).
+    for study in ["moving", "moving/door-maze"] {
+        let here = results.join(study);
+        let out = dir.path().join(format!("{}.md", study.replace('/', "-")));
+        let command = format!("host-sim report --results docs/results/{study}");
+        host_sim::study::moving::report(&here, &out, &command).unwrap();
+        let made = std::fs::read_to_string(&out).unwrap();
+        let committed = std::fs::read_to_string(here.join("summary.md")).unwrap();
+        assert!(
+            committed.lines().count() > 4 && made.starts_with(&committed),
+            "docs/results/{study}/summary.md is not the table {command} makes"
+        );
+    }
 }
 
 /// Issue 24, found by Fig. 7 at the paper's pace: a disc dropped on bug_trap's path left
@@ -1782,4 +1796,101 @@ fn shared_option_groups_and_old_spellings() {
     assert!(ok, "{err}");
     assert!(text.contains("Cpu clock"), "{text}");
     assert!(out.join("result.json").exists());
+}
+
+/// Every relative link of the repository's Markdown pages lands: the file or folder exists
+/// and, for a `#fragment` into a Markdown page, the page has a heading of that name (GitHub's
+/// anchors: lower case, punctuation dropped, spaces as hyphens). The docs were moved into
+/// guides, reference, results and notebook folders (issue 44); a link left behind fails here.
+#[test]
+fn docs_links_land() {
+    fn pages(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            if p.is_dir() {
+                if !name.starts_with('.') && name != "target" && name != "node_modules" {
+                    pages(&p, out);
+                }
+            } else if name.ends_with(".md") {
+                out.push(p);
+            }
+        }
+    }
+    fn anchors(page: &str) -> Vec<String> {
+        let mut fenced = false;
+        let mut out = Vec::new();
+        for line in page.lines() {
+            if line.starts_with("```") {
+                fenced = !fenced;
+            }
+            if fenced || !line.starts_with('#') {
+                continue;
+            }
+            let title = line.trim_start_matches('#').trim();
+            let slug: String = title
+                .to_lowercase()
+                .chars()
+                .filter(|c| c.is_alphanumeric() || *c == ' ' || *c == '-' || *c == '_')
+                .map(|c| if c == ' ' { '-' } else { c })
+                .collect();
+            out.push(slug);
+        }
+        out
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut all = Vec::new();
+    pages(&root, &mut all);
+    assert!(all.len() > 20, "only {} pages found", all.len());
+    let mut broken = Vec::new();
+    for page in &all {
+        let text = std::fs::read_to_string(page).unwrap();
+        let mut fenced = false;
+        for line in text.lines() {
+            if line.trim_start().starts_with("```") {
+                fenced = !fenced;
+            }
+            if fenced {
+                continue;
+            }
+            let mut rest = line;
+            while let Some(i) = rest.find("](") {
+                rest = &rest[i + 2..];
+                let Some(end) = rest.find(')') else { break };
+                let target = &rest[..end];
+                rest = &rest[end..];
+                if target.contains("://") || target.starts_with("mailto:") || target.contains(' ') {
+                    continue;
+                }
+                let (file, frag) = match target.split_once('#') {
+                    Some((f, a)) => (f, Some(a)),
+                    None => (target, None),
+                };
+                let dest = if file.is_empty() {
+                    page.clone()
+                } else {
+                    page.parent().unwrap().join(file)
+                };
+                let shown = page.strip_prefix(&root).unwrap().display().to_string();
+                if !dest.exists() {
+                    broken.push(format!("{shown}: {target} (no such file)"));
+                    continue;
+                }
+                if let Some(frag) = frag {
+                    if dest.extension().is_some_and(|e| e == "md")
+                        && !anchors(&std::fs::read_to_string(&dest).unwrap())
+                            .iter()
+                            .any(|a| a == frag)
+                    {
+                        broken.push(format!("{shown}: {target} (no such heading)"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        broken.is_empty(),
+        "links that do not land:\n{}",
+        broken.join("\n")
+    );
 }

@@ -437,7 +437,7 @@ impl Config {
 
     /// The tuned version of a configuration: the same planner (base, metric, Table 1's
     /// switches) with every tactic on ([`Tactics::TUNED`]) and these parameters,
-    /// measured against the paper's (`docs/performance.md`):
+    /// measured against the paper's (`docs/notebook/against-ompl.md`):
     /// - `clock_every` 256 and `clock_every_max` 8,192: the deadlines read the clock at most
     ///   every 256 work units instead of 50-80 times per expansion, and the readings are paced
     ///   by what they cost: a CPU-time clock (about 0.5 us a reading here) is read every few

@@ -1,7 +1,7 @@
 //! The tuned planner's tactics: engineering changes beyond the paper's Algorithms 1-6, each
 //! with a name. The paper's planner runs with none of them ([`Tactics::NONE`]); the tuned one
 //! ([`crate::Config::tuned`]) with all of them ([`Tactics::TUNED`]), the set that won in every
-//! measurement (`docs/performance.md`, "One tuned default" and "Corner cuts"). Each can be
+//! measurement (`docs/notebook/tuned-default.md`). Each can be
 //! turned on or off alone (`host-sim ... 'NAME@connect=false'`), so each can be measured apart.
 
 /// Which of the tuned planner's tactics run. Off, each part runs as the paper's algorithm

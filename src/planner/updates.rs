@@ -52,7 +52,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// overlay): O(cells) to submit; the next `plan` or `grow` call re-tests the edges of both
     /// trees near the changed cells (an edge crossing a marked cell is blocked like one
     /// through a circle, one whose cells cleared reopens) and charges that work. Returns how
-    /// many cells changed. The diffusion table is not rebaked (docs/moving.md says what that
+    /// many cells changed. The diffusion table is not rebaked (docs/guides/moving.md says what that
     /// costs).
     pub fn set_cells(
         &mut self,

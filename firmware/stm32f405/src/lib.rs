@@ -13,7 +13,7 @@
 //!
 //! The planner code is the crate's, unchanged: the same `Planner`, storage and `SysTickClock`
 //! as the QEMU firmware, so the QEMU figures carry over (a 168 MHz M4F with the ART on runs
-//! about 1.1-1.5 cycles per instruction, `docs/board.md`).
+//! about 1.1-1.5 cycles per instruction, `docs/guides/board.md`).
 #![no_std]
 
 use bi_am_rrt::cortex::SysTickClock;

@@ -1,5 +1,5 @@
 //! `host-sim params`: the configuration reference, every value a `NAME@field=value` override
-//! can set (the core's parameter table), as Markdown (`docs/configuration.md` is its output).
+//! can set (the core's parameter table), as Markdown (`docs/reference/configuration.md` is its output).
 
 use anyhow::Result;
 use clap::Args;

@@ -212,7 +212,7 @@ pub fn apply(cfg: &mut Config, field: &str, v: &str) -> Result<()> {
     Ok(())
 }
 
-/// The configuration reference (`docs/configuration.md`, `host-sim params`): every value of
+/// The configuration reference (`docs/reference/configuration.md`, `host-sim params`): every value of
 /// the core's parameter table by group, with its unit, rule, the paper's and the tuned
 /// Bi-AM-RRT*(D)'s value and its line of doc, as Markdown.
 pub fn reference() -> String {

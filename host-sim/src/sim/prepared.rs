@@ -614,7 +614,7 @@ pub fn narrow_warning(
          e_max / 4 ({:.2} m; median width {:.2} m){nodes}: sampling trees, this planner's and \
          OMPL's, cross long narrow corridors slowly and may not reach this goal {budget}; a \
          grid planner finds it in milliseconds (`host-sim optimum` runs A* and Theta*; \
-         docs/performance.md, \"Grid planners or this planner\")",
+         docs/notebook/grid-planners.md)",
         k + 1,
         p.narrow_m,
         p.length_m,
