@@ -131,6 +131,8 @@
 #![forbid(unsafe_code)]
 // `hw-sqrt`: the FPU's square root through `core::f32::math` (unstable: nightly Rust).
 #![cfg_attr(feature = "hw-sqrt", feature(core_float_math))]
+// docs.rs (nightly, `--cfg docsrs`): each optional item is marked with the feature it needs.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![warn(missing_docs)]
 // No reachable panic (promise 2): the non-test code may not index, unwrap, panic, overflow an
 // integer or truncate in a cast. Local `allow`s carry a one-line reason; the panic-never build
