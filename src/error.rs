@@ -227,6 +227,27 @@ error_enum! {
     }
 }
 
+error_enum! {
+    /// Why a roadmap ([`crate::roadmap::Roadmap`]) was refused.
+    pub enum RoadmapError {
+        /// Fewer bytes than the header, or than the sizes it announces.
+        Truncated => "roadmap truncated",
+        /// The magic bytes are wrong: not a roadmap.
+        BadMagic => "not a roadmap (bad magic)",
+        /// A format version this build cannot read.
+        UnsupportedVersion => "unsupported roadmap version",
+        /// A field is out of range: sizes, an edge list out of order or naming no node, a
+        /// position that is not finite.
+        BadHeader => "roadmap field out of range",
+        /// The roadmap was baked from another map (or for another robot body) than the
+        /// planner's.
+        WrongMap => "the roadmap was baked from another map",
+        /// The roadmap has more nodes than the reverse tree's arena has free slots (the
+        /// search's scratch): at most `N - 1`.
+        TooLarge => "the roadmap has more nodes than the tree arena holds (N - 1)",
+    }
+}
+
 /// Why a diffusion table was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -91,6 +91,9 @@
 //!    - `rewire`: Algorithms 3-6 (`root.rs`, `goal.rs`), RT-RRT*'s random rewiring
 //!      (`random.rs`) and the tuned path shortcuts (`shortcuts.rs`).
 //!    - [`motion`]: the waypoint rule against moving obstacles (beyond the paper).
+//!    - `roadmap` (feature `roadmap`): a reduced visibility graph baked with the map and
+//!      searched once per goal for the first solution (beyond the paper; the `roadmap`
+//!      tactic).
 //! 4. Around it: [`agent`], the papers' benchmark protocol (one leg from start to goal);
 //!    [`builtin`], the built-in scenarios in flash; [`error`], the small error enums; `slots`,
 //!    panic-free array access.
@@ -107,6 +110,9 @@
 //! - `clearance`: the clearance preference ([`clearance`], `Config::clearance_weight`): paths
 //!   keep off walls where the space allows. Off by default (a firmware without it carries
 //!   none of its code).
+//! - `roadmap`: the `roadmap` module and `Planner::set_roadmap`: a roadmap baked with the map
+//!   (`host-sim` bakes one per scenario) gives a new goal its first path at once. Off by
+//!   default (a firmware without it carries none of its code).
 //! - `hw-sqrt`: the target's square-root instruction (`vsqrt.f32` on a Cortex-M4F) instead of
 //!   `libm`'s routine, the same bits (IEEE 754 rounds both correctly); needs nightly Rust.
 //! - `firmware-example`: builds the repository's Cortex-M firmware examples (thumb targets
@@ -170,6 +176,9 @@ pub mod metric;
 pub mod motion;
 pub mod planner;
 mod rewire;
+#[cfg(feature = "roadmap")]
+#[cfg_attr(docsrs, doc(cfg(feature = "roadmap")))]
+pub mod roadmap;
 mod sample;
 mod slots;
 mod store;

@@ -296,6 +296,22 @@ impl<const N: usize> Tree<N> {
     }
 
     /// Clears mark `m` from every node: O(len) byte writes.
+    /// The arena's slots after its nodes (`N - len` of each), as scratch for a search that
+    /// runs while the tree is (nearly) empty (module `roadmap`): positions, parents and both
+    /// child links. A node added later sets every field of its slot, so nothing written here is
+    /// ever read as a node.
+    #[cfg(feature = "roadmap")]
+    #[allow(clippy::type_complexity)] // four arrays of the arena, named by the caller
+    pub(crate) fn spare(&mut self) -> (&mut [Point], &mut [u16], &mut [u16], &mut [u16]) {
+        let n = usize::from(self.len);
+        (
+            self.pos.get_mut(n..).unwrap_or_default(),
+            self.parent.get_mut(n..).unwrap_or_default(),
+            self.first_child.get_mut(n..).unwrap_or_default(),
+            self.next_sibling.get_mut(n..).unwrap_or_default(),
+        )
+    }
+
     pub(crate) fn clear_marks(&mut self, m: Mark) {
         let n = self.len();
         for f in self.flags.iter_mut().take(n) {

@@ -1,5 +1,5 @@
 //! The byte readers of the core on arbitrary bytes (issue 7, fuzz target b): the diffusion
-//! table reader, the occupancy grid constructor with its collision tests, and the spatial
+//! table reader, the roadmap reader, the occupancy grid constructor with its collision tests, and the spatial
 //! index with arbitrary bounds. Nothing may panic; what is accepted must answer queries.
 #![no_main]
 
@@ -45,6 +45,14 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
                 d.to_bits() == e.to_bits() || (d.is_nan() && e.is_nan()),
                 "symmetric"
             );
+        }
+    }
+    // The roadmap reader (feature `roadmap`): what it accepts must answer every query.
+    if let Ok(rm) = bi_am_rrt::roadmap::Roadmap::from_bytes(data) {
+        for i in 0..rm.len().min(64) {
+            let _ = rm.node(i);
+            let _ = rm.tangent(i, probe(0));
+            assert!(rm.neighbours(i).all(|j| j < rm.len()), "edges name nodes");
         }
     }
     // The grid constructor and its queries.

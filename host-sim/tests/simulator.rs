@@ -1876,14 +1876,13 @@ fn docs_links_land() {
                     broken.push(format!("{shown}: {target} (no such file)"));
                     continue;
                 }
-                if let Some(frag) = frag {
-                    if dest.extension().is_some_and(|e| e == "md")
-                        && !anchors(&std::fs::read_to_string(&dest).unwrap())
-                            .iter()
-                            .any(|a| a == frag)
-                    {
-                        broken.push(format!("{shown}: {target} (no such heading)"));
-                    }
+                if let Some(frag) = frag
+                    && dest.extension().is_some_and(|e| e == "md")
+                    && !anchors(&std::fs::read_to_string(&dest).unwrap())
+                        .iter()
+                        .any(|a| a == frag)
+                {
+                    broken.push(format!("{shown}: {target} (no such heading)"));
                 }
             }
         }

@@ -47,6 +47,10 @@ pub struct Tactics {
     /// a segment test for the frontier (each rewire still tests its own segment): a quarter
     /// more expansions on a fine map, where that test was most of the sweep's work.
     pub open_frontier: bool,
+    /// With a roadmap attached ([`crate::Planner::set_roadmap`], feature `roadmap`), a new
+    /// goal's first call searches it for a path and grafts it as the first solution (module
+    /// `roadmap`); the trees search as ever when it has none. Without a roadmap it does nothing.
+    pub roadmap: bool,
 }
 
 impl Tactics {
@@ -62,6 +66,7 @@ impl Tactics {
         recycle_when_full: false,
         corner_cuts: false,
         open_frontier: false,
+        roadmap: false,
     };
 
     /// The tuned planner: all.
@@ -76,10 +81,11 @@ impl Tactics {
         recycle_when_full: true,
         corner_cuts: true,
         open_frontier: true,
+        roadmap: true,
     };
 
     /// Each tactic's name (the field's), in declaration order.
-    pub const NAMES: [&'static str; 10] = [
+    pub const NAMES: [&'static str; 11] = [
         "steer_fan",
         "nearest_step",
         "reuse_tests",
@@ -90,10 +96,11 @@ impl Tactics {
         "recycle_when_full",
         "corner_cuts",
         "open_frontier",
+        "roadmap",
     ];
 
     /// The switches in [`Tactics::NAMES`] order.
-    pub const fn as_array(&self) -> [bool; 10] {
+    pub const fn as_array(&self) -> [bool; 11] {
         [
             self.steer_fan,
             self.nearest_step,
@@ -105,6 +112,7 @@ impl Tactics {
             self.recycle_when_full,
             self.corner_cuts,
             self.open_frontier,
+            self.roadmap,
         ]
     }
 }

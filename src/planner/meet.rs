@@ -43,6 +43,111 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         }
     }
 
+    /// The `roadmap` tactic (module [`crate::roadmap`]): searches the attached roadmap from the
+    /// root to the goal, tests every edge of the path found, makes it a branch of the reverse
+    /// tree (one-tree planners borrow the reverse arena for it) and grafts it below the root.
+    /// Returns whether the goal joined. Only while the reverse arena has a free slot per
+    /// roadmap node: they are the search's scratch.
+    #[cfg(feature = "roadmap")]
+    pub(super) fn roadmap_join<C: Clock + ?Sized>(
+        &mut self,
+        meter: &Meter<'_, C>,
+        call: Deadline,
+    ) -> bool {
+        let (Some(rm), Some(goal)) = (self.roadmap, self.goal) else {
+            return false;
+        };
+        if !self.cfg.tactics.roadmap
+            || goal.node.is_some()
+            || N.saturating_sub(self.rev.tree.len()) < rm.len()
+        {
+            return false;
+        }
+        let root = self.root_position();
+        let env = Env {
+            map: &self.map,
+            metric: &self.metric,
+            cfg: &self.cfg,
+            call,
+        };
+        let one_tree = self.rev_goal.is_none();
+        // The goal in sight: the straight segment is the path (no search).
+        if env.free(root, goal.pos, meter) {
+            if one_tree {
+                self.rev.reset(goal.pos);
+            }
+            let (Some(a), Some(b)) = (self.fwd.tree.root(), self.rev.tree.root()) else {
+                return false;
+            };
+            let met = self.meet(a, b, meter);
+            if one_tree {
+                self.rev.clear();
+            }
+            self.stats.roadmap = met;
+            return met;
+        }
+        let mut path = heapless::Vec::new();
+        let (g, parent, heap, slot) = self.rev.tree.spare();
+        let mut scratch = crate::roadmap::Scratch {
+            g,
+            parent,
+            heap,
+            slot,
+        };
+        if !crate::roadmap::find_path(&rm, &env, root, goal.pos, &mut scratch, meter, &mut path) {
+            return false;
+        }
+        // The attaching segments were tested; the roadmap's own edges are tested here, against
+        // everything the map holds now. They are free of the grid it was baked for (`fits`
+        // checked its cells): for a point robot on a map whose live cells mark nothing, only
+        // the dynamic obstacles are left to test.
+        let node = |i: &u16| rm.node(usize::from(*i)).unwrap_or(goal.pos);
+        let baked_free = self.map.radius() == 0.0 && self.map.marked_cells() == 0;
+        let obstacles = units(self.map.obstacles().len());
+        for (a, b) in path.iter().zip(path.iter().skip(1)) {
+            let (a, b) = (node(a), node(b));
+            let free = if baked_free {
+                meter.charge(obstacles.saturating_add(2));
+                !self.map.obstacles().blocks_segment(a, b)
+            } else {
+                env.free(a, b, meter)
+            };
+            if meter.expired(&call) || !free {
+                return false;
+            }
+        }
+        if one_tree {
+            self.rev.reset(goal.pos);
+        }
+        let Some(mut parent) = self.rev.tree.root() else {
+            return false;
+        };
+        let mut prev = goal.pos;
+        for i in &path {
+            let p = node(i);
+            let edge = env.edge(prev, p, meter);
+            match self.rev.insert(p, parent, edge) {
+                Ok(id) => parent = id,
+                Err(_) => {
+                    if one_tree {
+                        self.rev.clear();
+                    }
+                    return false;
+                }
+            }
+            prev = p;
+        }
+        let Some(a) = self.fwd.tree.root() else {
+            return false;
+        };
+        let met = self.meet(a, parent, meter);
+        if one_tree {
+            self.rev.clear();
+        }
+        self.stats.roadmap = met;
+        met
+    }
+
     /// Grafts the reverse tree below forward node `a` at reverse node `b` (their segment tested
     /// free) and records the goal joining; returns whether the graft was made.
     fn meet<C: Clock + ?Sized>(&mut self, a: NodeId, b: NodeId, meter: &Meter<'_, C>) -> bool {

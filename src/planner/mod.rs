@@ -93,6 +93,8 @@ use rand_core::Rng;
 
 use crate::clock::{Clock, Deadline, Meter};
 use crate::config::{Base, Config, RewireMode};
+#[cfg(feature = "roadmap")]
+use crate::error::RoadmapError;
 use crate::error::{InputError, ObstacleError, SetupError, TreeError};
 use crate::expand::{Env, Near, Target, TreeStore};
 use crate::geometry::Point;
@@ -291,6 +293,9 @@ pub struct Stats {
     pub reanchored: u32,
     /// Times no tree node could reach the agent and the forward tree restarted from it.
     pub restarted: u32,
+    /// Whether the goal joined over the attached roadmap's path (module [`crate::roadmap`]).
+    #[cfg(feature = "roadmap")]
+    pub roadmap: bool,
     /// States let in by the starving rule (a search whose density rule had turned away
     /// 1,024 states in a row admits a state no node is near: the expansion's starving rule),
     /// both trees (0 in 600 first-leg searches on the paper's maps).
@@ -323,6 +328,12 @@ pub struct Planner<'s, 'm, M, R, const N: usize, const B: usize, const K: usize>
     /// The rates the last call measured ([`Meter::rates`]) and the clock's ticks per second
     /// they were measured in: the next call predicts with them from its start.
     rate: (u64, (u64, u64)),
+    /// The roadmap attached ([`Planner::set_roadmap`]).
+    #[cfg(feature = "roadmap")]
+    roadmap: Option<crate::roadmap::Roadmap<'m>>,
+    /// A goal was set and the next call has not searched the roadmap for it yet.
+    #[cfg(feature = "roadmap")]
+    roadmap_due: bool,
 }
 
 impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
@@ -391,7 +402,34 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             rate: (0, (0, 0)),
             call: Deadline::NEVER,
             stale: false,
+            #[cfg(feature = "roadmap")]
+            roadmap: None,
+            #[cfg(feature = "roadmap")]
+            roadmap_due: false,
         })
+    }
+
+    /// Attaches a roadmap baked for this map (module [`crate::roadmap`]; `None` detaches it):
+    /// with the `roadmap` tactic on ([`crate::Tactics`]), the first call after each
+    /// [`Planner::set_goal`] searches it for a first path. Refused when it was baked from
+    /// another map or for another robot body ([`RoadmapError::WrongMap`]:
+    /// [`crate::roadmap::Roadmap::fits`] [`Map::metric_grid`]) or has `N` nodes or more
+    /// ([`RoadmapError::TooLarge`]: the search's scratch is the reverse arena's free slots).
+    #[cfg(feature = "roadmap")]
+    pub fn set_roadmap(
+        &mut self,
+        roadmap: Option<crate::roadmap::Roadmap<'m>>,
+    ) -> Result<(), RoadmapError> {
+        if let Some(rm) = &roadmap {
+            if !rm.fits(&self.map.metric_grid()) {
+                return Err(RoadmapError::WrongMap);
+            }
+            if rm.len() >= N {
+                return Err(RoadmapError::TooLarge);
+            }
+        }
+        self.roadmap = roadmap;
+        Ok(())
     }
 
     /// The planner's name in the paper's terms, from its configuration and its metric's kind
@@ -485,6 +523,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             pos: goal,
             node: None,
         });
+        #[cfg(feature = "roadmap")]
+        {
+            self.roadmap_due = true;
+        }
         self.fwd.restart_goal_sweep();
         if self.cfg.bidirectional {
             self.rev.reset(goal);

@@ -176,6 +176,16 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             steps
         };
         while expansions < self.cfg.budget.max_expansions && !meter.expired(&steps) {
+            // A new goal's first step: the roadmap's path, or the straight one (module
+            // `roadmap`). Tried after a tree step or two, it cost more than it saved.
+            #[cfg(feature = "roadmap")]
+            if core::mem::take(&mut self.roadmap_due)
+                && self.roadmap_join(meter, steps)
+                && let Some(agent) = follow
+                && !*advanced
+            {
+                *advanced = self.follow(agent, meter, call);
+            }
             let joined = self.goal_node().is_some();
             // Each tree's expansion counts (Algorithm 1 runs `Expend_f` and then `Expend_r`,
             // each with its own rewiring): a step that grows both trees counts two, so one-

@@ -82,6 +82,20 @@ fn exercise_planner<M: Metric, const N: usize, const B: usize>(
     let clock = FakeClock::nanos()
         .with_work_cost(black_box(12))
         .with_step(black_box(1));
+    // A roadmap (feature `roadmap`): written, read from opaque bytes, searched by the calls.
+    let mut rm_bytes = [0u8; 160];
+    let nodes = [point(), point()];
+    let _ = bi_am_rrt::roadmap::write(
+        &grid,
+        &nodes,
+        &[black_box(1u8), 0],
+        &[0, 1, 2],
+        &[1, 0],
+        &mut rm_bytes,
+    );
+    if let Ok(rm) = bi_am_rrt::roadmap::Roadmap::from_bytes(black_box(&rm_bytes[..])) {
+        let _ = black_box(p.set_roadmap(Some(rm)));
+    }
     let _ = p.set_goal(point());
     let _ = p.plan(&clock, point());
     let _ = p.grow(&clock);

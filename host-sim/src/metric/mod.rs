@@ -22,6 +22,7 @@ pub mod diffusion;
 pub mod graph;
 pub mod grid_planners;
 pub mod optimum;
+pub mod roadmap;
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;

@@ -60,6 +60,10 @@ pub struct Prepared {
     /// A diffusion table the caller gave ([`Prepared::with_diffusion_table`]): the planners'
     /// diffusion metric instead of a bake.
     given_table: Option<Vec<u8>>,
+    /// The roadmap, once baked ([`Prepared::roadmap`]), or why there is none.
+    roadmap: OnceLock<Result<crate::metric::roadmap::Baked, String>>,
+    /// A note about the roadmap was printed (a planner too small for it).
+    roadmap_noted: std::sync::atomic::AtomicBool,
 }
 
 impl Prepared {
@@ -81,6 +85,69 @@ impl Prepared {
             no_optimum: false,
             grid_paths: OnceLock::new(),
             given_table: None,
+            roadmap: OnceLock::new(),
+            roadmap_noted: std::sync::atomic::AtomicBool::new(false),
+        }
+    }
+
+    /// The scenario's roadmap (the `roadmap` tactic; module [`crate::metric::roadmap`]),
+    /// baked the first time it is asked for from the grid the planner tests paths on (inflated
+    /// for the robot's body, if any), or why there is none (a map whose outline keeps more
+    /// than [`crate::metric::roadmap::MAX_NODES`] corners).
+    pub fn roadmap(&self) -> Result<&crate::metric::roadmap::Baked> {
+        self.roadmap
+            .get_or_init(|| {
+                let sc = &self.scenario;
+                let map = sc.planner_map::<1>().map_err(|e| format!("{e:#}"))?;
+                let space = sc
+                    .space
+                    .as_ref()
+                    .map_or_else(|| sc.map.grid(), |s| s.grid());
+                let metric_grid = map.metric_grid();
+                crate::metric::roadmap::bake(
+                    &space,
+                    &metric_grid,
+                    crate::metric::roadmap::MAX_NODES,
+                )
+                .map_err(|e| format!("scenario {}: {e:#}", sc.name))
+            })
+            .as_ref()
+            .map_err(|e| anyhow!("{e}"))
+    }
+
+    /// Attaches the scenario's roadmap to `planner` when its configuration has the `roadmap`
+    /// tactic on; when there is none or it does not fit the planner's arena, says so once
+    /// and the planner runs without it.
+    pub fn attach_roadmap<
+        'm,
+        M: bi_am_rrt::Metric,
+        R: rand_core::Rng,
+        const N: usize,
+        const B: usize,
+        const K: usize,
+    >(
+        &'m self,
+        planner: &mut bi_am_rrt::Planner<'_, 'm, M, R, N, B, K>,
+    ) {
+        if !planner.config().tactics.roadmap {
+            return;
+        }
+        let attached = self.roadmap().and_then(|b| {
+            let rm = bi_am_rrt::roadmap::Roadmap::from_bytes(&b.bytes)
+                .map_err(|e| anyhow!("roadmap: {e}"))?;
+            planner
+                .set_roadmap(Some(rm))
+                .map_err(|e| anyhow!("roadmap of {} nodes: {e}", b.nodes))
+        });
+        if let Err(e) = attached
+            && !self
+                .roadmap_noted
+                .swap(true, std::sync::atomic::Ordering::Relaxed)
+        {
+            eprintln!(
+                "note: {}: planning without a roadmap ({e:#})",
+                self.scenario.name
+            );
         }
     }
 
@@ -337,8 +404,10 @@ pub fn planner_on<'s, 'm, const N: usize>(
     let mut cfg = cfg.cfg;
     cfg.robot_radius = prep.scenario.robot_radius;
     cfg.clearance_weight = prep.scenario.clearance_weight();
-    Planner::new(storage, map, metric, rng, cfg, start)
-        .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))
+    let mut planner = Planner::new(storage, map, metric, rng, cfg, start)
+        .map_err(|e| anyhow!("planner for {}: {e}", prep.scenario.name))?;
+    prep.attach_roadmap(&mut planner);
+    Ok(planner)
 }
 
 /// [`with_planner`] on a map with a live overlay ([`bi_am_rrt::map::Overlay`]): cells the run

@@ -1,0 +1,158 @@
+//! The roadmap bake (the core's module `bi_am_rrt::roadmap`, the `roadmap` tactic): a reduced
+//! visibility graph of the grid the planner tests paths on.
+//!
+//! - **Nodes**: a node 0.6 cells off each convex corner of the occupied cells (a grid vertex
+//!   with exactly one occupied cell of the four around it), along the corner's diagonal, kept
+//!   when it is a vertex of the obstacle's outline at the scale of [`HULL_M`] (at least two
+//!   cells): the occupied cells within that distance of the corner, seen from it, span less
+//!   than [`MAX_ANGLE_DEG`]. The middle steps of a wall drawn as a staircase and the bumps of
+//!   pixel noise on a SLAM map span about 180 degrees and are dropped, so a fine map does not
+//!   carry thousands of corners that no shortest path needs (found with
+//!   `host-sim/examples/roadmap_probe.rs` on nine maps: `docs/notebook/first-solution.md`).
+//! - **Edges**: between two nodes that see each other over a free segment tangent to the
+//!   obstacle at both ends (a shortest path bends only at convex corners, tangentially).
+//!
+//! The planner tests every edge of a path it takes from the roadmap, so a roadmap never makes
+//! a path unsafe; a poor one only leaves the first solution to the trees.
+
+use anyhow::{Result, bail};
+use bi_am_rrt::geometry::Point;
+use bi_am_rrt::map::OccupancyGrid;
+use bi_am_rrt::roadmap::{self, NO_CORNER};
+
+/// Nodes stand this far (in cells) off their corner, along the corner's diagonal.
+pub const OFFSET_CELLS: f32 = 0.6;
+/// The scale, in metres, at which a corner must be a vertex of the obstacle's outline (at
+/// least two cells).
+pub const HULL_M: f32 = 0.3;
+/// A corner whose occupied cells within [`HULL_M`] span this angle or more is dropped.
+pub const MAX_ANGLE_DEG: f32 = 165.0;
+/// Most nodes a bake keeps: the edges are found by testing every pair, and a planner's
+/// reverse arena must hold the search's scratch (`N - 1` nodes).
+pub const MAX_NODES: usize = 4_000;
+
+/// A baked roadmap: its bytes (the core's format) and what they hold.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    /// The roadmap in the core's format (`bi_am_rrt::roadmap::Roadmap::from_bytes`).
+    pub bytes: Vec<u8>,
+    /// Nodes.
+    pub nodes: usize,
+    /// Edges (each counted once).
+    pub edges: usize,
+}
+
+/// Bakes the roadmap of `space` (the grid the planner tests paths on: the scenario's, or the
+/// grid inflated for the robot's body) for the planner's map `metric_grid` (its
+/// `Map::metric_grid`: the roadmap records its hash and size). Errors when more than
+/// `max_nodes` nodes are kept.
+pub fn bake(
+    space: &OccupancyGrid<'_>,
+    metric_grid: &OccupancyGrid<'_>,
+    max_nodes: usize,
+) -> Result<Baked> {
+    let cell = space.cell_size();
+    let (cols, rows) = (i32::from(space.cols()), i32::from(space.rows()));
+    let occ = |c: i32, r: i32| {
+        c < 0 || r < 0 || c >= cols || r >= rows || space.is_occupied(c as u16, r as u16)
+    };
+    let reach = ((HULL_M / cell).round() as i32).max(2);
+    let widest = MAX_ANGLE_DEG.to_radians();
+    let mut nodes: Vec<Point> = Vec::new();
+    let mut corners: Vec<u8> = Vec::new();
+    let mut dirs: Vec<(f32, f32)> = Vec::new();
+    for vy in 1..rows {
+        for vx in 1..cols {
+            let q = [
+                occ(vx - 1, vy - 1),
+                occ(vx, vy - 1),
+                occ(vx - 1, vy),
+                occ(vx, vy),
+            ];
+            if q.iter().filter(|&&o| o).count() != 1 {
+                continue;
+            }
+            // The diagonal from the vertex into the occupied cell.
+            let d = match q.iter().position(|&o| o) {
+                Some(0) => (-1.0f32, -1.0f32),
+                Some(1) => (1.0, -1.0),
+                Some(2) => (-1.0, 1.0),
+                _ => (1.0, 1.0),
+            };
+            // A vertex of the outline at the scale `reach`.
+            let (mut lo, mut hi, mut wraps) = (0.0f32, 0.0f32, false);
+            for r in -reach..reach {
+                for c in -reach..reach {
+                    let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
+                    if x * x + y * y > (reach * reach) as f32 || !occ(vx + c, vy + r) {
+                        continue;
+                    }
+                    let a = (d.0 * y - d.1 * x).atan2(d.0 * x + d.1 * y);
+                    wraps |= a.abs() > 0.95 * std::f32::consts::PI;
+                    lo = lo.min(a);
+                    hi = hi.max(a);
+                }
+            }
+            if wraps || hi - lo >= widest {
+                continue;
+            }
+            let p = Point::new(
+                (vx as f32 - OFFSET_CELLS * d.0) * cell,
+                (vy as f32 - OFFSET_CELLS * d.1) * cell,
+            );
+            if !space.point_free(p) {
+                continue;
+            }
+            if nodes.len() >= max_nodes.min(roadmap::MAX_NODES) {
+                bail!(
+                    "the roadmap would keep more than {max_nodes} nodes (corners of a fine or \
+                     cluttered map): run without it ('@roadmap=false')"
+                );
+            }
+            nodes.push(p);
+            corners.push(u8::from(d.0 > 0.0) | (u8::from(d.1 > 0.0) << 1));
+            dirs.push(d);
+        }
+    }
+    let tangent = |e: (f32, f32), d: (f32, f32)| {
+        let along = (e.0 * d.0 + e.1 * d.1).abs();
+        along * along <= (e.0 * e.0 + e.1 * e.1) * 1.0001
+    };
+    // In order of x, then y (the core's attach scans outwards from a point's x).
+    let mut order: Vec<usize> = (0..nodes.len()).collect();
+    order.sort_by(|&a, &b| {
+        nodes[a]
+            .x
+            .total_cmp(&nodes[b].x)
+            .then(nodes[a].y.total_cmp(&nodes[b].y))
+    });
+    let nodes: Vec<Point> = order.iter().map(|&i| nodes[i]).collect();
+    let corners: Vec<u8> = order.iter().map(|&i| corners[i]).collect();
+    let dirs: Vec<(f32, f32)> = order.iter().map(|&i| dirs[i]).collect();
+    let mut adj: Vec<Vec<u16>> = vec![Vec::new(); nodes.len()];
+    for i in 0..nodes.len() {
+        for j in i + 1..nodes.len() {
+            let e = (nodes[j].x - nodes[i].x, nodes[j].y - nodes[i].y);
+            if tangent(e, dirs[i]) && tangent(e, dirs[j]) && space.segment_free(nodes[i], nodes[j])
+            {
+                adj[i].push(j as u16);
+                adj[j].push(i as u16);
+            }
+        }
+    }
+    let mut first = vec![0u32];
+    let mut far = Vec::new();
+    for a in &adj {
+        far.extend_from_slice(a);
+        first.push(far.len() as u32);
+    }
+    debug_assert!(corners.iter().all(|&c| c < NO_CORNER));
+    let mut bytes = vec![0u8; roadmap::bytes_needed(nodes.len(), far.len())];
+    roadmap::write(metric_grid, &nodes, &corners, &first, &far, &mut bytes)
+        .map_err(|e| anyhow::anyhow!("roadmap bake: {e}"))?;
+    Ok(Baked {
+        bytes,
+        nodes: nodes.len(),
+        edges: far.len() / 2,
+    })
+}

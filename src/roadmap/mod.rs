@@ -1,0 +1,581 @@
+//! A roadmap baked with the map, for the first solution (beyond the paper; the `roadmap`
+//! tactic, feature `roadmap`). Algorithm 1 grows both trees from nothing until they meet: on
+//! the reference maps that is about ten expansions and thirty segment tests before the goal
+//! joins. The static map does not change between queries, so the shape of its shortest paths
+//! can be baked, as the assisting metric's table is: a reduced visibility graph, a node just
+//! off each convex corner of the occupied cells and an edge between two nodes that see each
+//! other over a segment tangent to the obstacle at both ends (a shortest path bends only at
+//! convex corners; `host-sim` bakes it, `host-sim export` writes it as flash data).
+//!
+//! When a goal is set, the planner's first call searches the roadmap once ([`find_path`]):
+//! the root and the goal each attach to the nearest nodes they see (tangent at the node), A*
+//! (Euclidean heuristic) joins them, every edge of the path found is tested free as any tree
+//! edge is (the dynamic obstacles, live cells and the robot's body count), and the path
+//! becomes a branch of the reverse tree that meets the forward tree's root (paper Algorithm
+//! 1's meet and graft). From there the planner goes on as ever: rewiring shortens the path.
+//! When the roadmap has no path, an edge is blocked or the call's time runs out, nothing is
+//! kept and the trees search as they would have. The search needs no memory of its own: while
+//! the reverse tree holds only its root, its arena's unused slots are the search's scratch
+//! ([`crate::tree::Tree::spare`]).
+//!
+//! # Format (version 1, little-endian)
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 4 | magic `BRM1` |
+//! | 2, 2 | version (1), reserved (0) |
+//! | 4 | hash of the map it was baked for ([`crate::metric::map_hash`]) |
+//! | 2, 2, 4 | that map's columns, rows and cell size (`f32`, metres) |
+//! | 4, 4 | nodes `R`, directed edges `E` |
+//! | 8 R | each node's position, `x` then `y` (`f32`, metres), in order of `x` (then `y`) |
+//! | R, padded to 4 | each node's corner: bit 0 the diagonal into the corner's occupied cell points to `+x`, bit 1 to `+y`; 4 for a node without a corner |
+//! | 4 (R + 1) | where each node's edges start in the edge list (`u32`), then `E` |
+//! | 2 E, padded to 4 | the edges' far nodes (`u16`), each edge listed from both ends |
+
+use crate::clock::{Clock, Meter};
+use crate::error::RoadmapError;
+use crate::expand::Env;
+use crate::geometry::Point;
+use crate::metric::Metric;
+use crate::slots::{rd, units, wr};
+
+/// The magic bytes a roadmap starts with.
+pub const MAGIC: [u8; 4] = *b"BRM1";
+/// The format version this build reads and writes.
+pub const VERSION: u16 = 1;
+/// Header bytes.
+pub const HEADER_BYTES: usize = 28;
+/// A node's corner byte when the node has no corner (any direction is tangent).
+pub const NO_CORNER: u8 = 4;
+/// Most roadmap nodes (ids are `u16`).
+pub const MAX_NODES: usize = u16::MAX as usize - 1;
+
+/// Nodes the root and the goal each consider, nearest first (tangent at the node).
+const ATTACH_CANDIDATES: usize = 8;
+/// Nodes the root and the goal each attach to, at most (those of the candidates they see).
+const ATTACH: usize = 6;
+/// The A* heuristic's weight: the straight distance to the goal counts twice, so the search
+/// pops far fewer nodes on a dense roadmap (a map of many small obstacles has 20-40 edges a
+/// node) for a first path at most twice the roadmap's shortest (rewiring shortens it from the
+/// first call on). Measured on the reference and nav2 maps: `docs/notebook/first-solution.md`.
+const WEIGHT: f32 = 2.0;
+/// Most nodes on a roadmap path the planner keeps (a longer one is dropped: the trees search).
+pub const PATH_MAX: usize = 128;
+
+const fn pad4(n: usize) -> usize {
+    n.saturating_add(3) & !3usize
+}
+
+/// Bytes of a roadmap of `nodes` nodes and `edges` directed edges.
+pub const fn bytes_needed(nodes: usize, edges: usize) -> usize {
+    HEADER_BYTES
+        .saturating_add(nodes.saturating_mul(8))
+        .saturating_add(pad4(nodes))
+        .saturating_add(nodes.saturating_add(1).saturating_mul(4))
+        .saturating_add(pad4(edges.saturating_mul(2)))
+}
+
+/// A roadmap read in place from its bytes (module docs), validated once when made.
+#[derive(Clone, Copy, Debug)]
+pub struct Roadmap<'a> {
+    map_hash: u32,
+    grid: (u16, u16, f32),
+    nodes: usize,
+    edges: usize,
+    pos: &'a [u8],
+    corner: &'a [u8],
+    first: &'a [u8],
+    far: &'a [u8],
+}
+
+fn u16_at(b: &[u8], at: usize) -> Option<u16> {
+    let s = b.get(at..at.checked_add(2)?)?;
+    Some(u16::from_le_bytes([*s.first()?, *s.get(1)?]))
+}
+
+fn u32_at(b: &[u8], at: usize) -> Option<u32> {
+    let s = b.get(at..at.checked_add(4)?)?;
+    Some(u32::from_le_bytes([
+        *s.first()?,
+        *s.get(1)?,
+        *s.get(2)?,
+        *s.get(3)?,
+    ]))
+}
+
+impl<'a> Roadmap<'a> {
+    /// Reads and validates a roadmap: magic, version, sizes, every edge list in order and in
+    /// range, every position finite. O(nodes + edges).
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, RoadmapError> {
+        if bytes.len() < HEADER_BYTES {
+            return Err(RoadmapError::Truncated);
+        }
+        if bytes.get(..4) != Some(&MAGIC[..]) {
+            return Err(RoadmapError::BadMagic);
+        }
+        if u16_at(bytes, 4) != Some(VERSION) {
+            return Err(RoadmapError::UnsupportedVersion);
+        }
+        let field = |at| u32_at(bytes, at).ok_or(RoadmapError::Truncated);
+        let map_hash = field(8)?;
+        let cols = u16_at(bytes, 12).ok_or(RoadmapError::Truncated)?;
+        let rows = u16_at(bytes, 14).ok_or(RoadmapError::Truncated)?;
+        let cell = f32::from_bits(field(16)?);
+        let nodes = usize::try_from(field(20)?).map_err(|_| RoadmapError::BadHeader)?;
+        let edges = usize::try_from(field(24)?).map_err(|_| RoadmapError::BadHeader)?;
+        if nodes > MAX_NODES || edges > usize::MAX / 8 {
+            return Err(RoadmapError::BadHeader);
+        }
+        if bytes.len() != bytes_needed(nodes, edges) {
+            return Err(if bytes.len() < bytes_needed(nodes, edges) {
+                RoadmapError::Truncated
+            } else {
+                RoadmapError::BadHeader
+            });
+        }
+        let mut at = HEADER_BYTES;
+        let mut take = |n: usize| {
+            let s = bytes.get(at..at.saturating_add(n));
+            at = at.saturating_add(n);
+            s.ok_or(RoadmapError::Truncated)
+        };
+        let pos = take(nodes.saturating_mul(8))?;
+        let corner = take(pad4(nodes))?;
+        let first = take(nodes.saturating_add(1).saturating_mul(4))?;
+        let far = take(pad4(edges.saturating_mul(2)))?;
+        let r = Self {
+            map_hash,
+            grid: (cols, rows, cell),
+            nodes,
+            edges,
+            pos,
+            corner,
+            first,
+            far,
+        };
+        let mut prev = 0usize;
+        let mut last_x = f32::NEG_INFINITY;
+        for i in 0..nodes {
+            let p = r.node(i).unwrap_or(Point::new(f32::NAN, f32::NAN));
+            if !p.is_finite() || p.x < last_x || rd(corner, i, 0) > NO_CORNER {
+                return Err(RoadmapError::BadHeader);
+            }
+            last_x = p.x;
+            let (a, b) = r.span(i).ok_or(RoadmapError::BadHeader)?;
+            if a != prev || b < a || b > edges {
+                return Err(RoadmapError::BadHeader);
+            }
+            prev = b;
+            for k in a..b {
+                let j = r.far(k).ok_or(RoadmapError::BadHeader)?;
+                if j >= nodes || j == i {
+                    return Err(RoadmapError::BadHeader);
+                }
+            }
+        }
+        if prev != edges {
+            return Err(RoadmapError::BadHeader);
+        }
+        Ok(r)
+    }
+
+    /// The hash of the map it was baked for ([`crate::metric::map_hash`] of the planner's
+    /// [`crate::Map::metric_grid`]); the planner refuses a roadmap of another map.
+    pub fn map_hash(&self) -> u32 {
+        self.map_hash
+    }
+
+    /// Whether it was baked for `grid`: the same hash ([`crate::metric::map_hash`]: its cells
+    /// and, for a robot body, the radius), columns, rows and cell size.
+    pub fn fits(&self, grid: &crate::map::OccupancyGrid<'_>) -> bool {
+        crate::metric::map_hash(grid) == Some(self.map_hash)
+            && (grid.cols(), grid.rows()) == (self.grid.0, self.grid.1)
+            && grid.cell_size().to_bits() == self.grid.2.to_bits()
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes
+    }
+
+    /// Whether it has no node.
+    pub fn is_empty(&self) -> bool {
+        self.nodes == 0
+    }
+
+    /// Number of edges (each counted once, though listed from both ends).
+    pub fn edges(&self) -> usize {
+        self.edges / 2
+    }
+
+    /// Node `i`'s position.
+    pub fn node(&self, i: usize) -> Option<Point> {
+        let at = i.checked_mul(8)?;
+        let x = f32::from_bits(u32_at(self.pos, at)?);
+        let y = f32::from_bits(u32_at(self.pos, at.checked_add(4)?)?);
+        Some(Point::new(x, y))
+    }
+
+    /// Node `i`'s corner byte (module docs).
+    pub fn corner(&self, i: usize) -> u8 {
+        rd(self.corner, i, NO_CORNER)
+    }
+
+    /// Where node `i`'s edges start and end in the edge list.
+    fn span(&self, i: usize) -> Option<(usize, usize)> {
+        let a = u32_at(self.first, i.checked_mul(4)?)?;
+        let b = u32_at(self.first, i.checked_add(1)?.checked_mul(4)?)?;
+        Some((usize::try_from(a).ok()?, usize::try_from(b).ok()?))
+    }
+
+    fn far(&self, k: usize) -> Option<usize> {
+        u16_at(self.far, k.checked_mul(2)?).map(usize::from)
+    }
+
+    /// The nodes node `i` has an edge to.
+    pub fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let (a, b) = self.span(i).unwrap_or((0, 0));
+        (a..b).filter_map(|k| self.far(k))
+    }
+
+    /// Whether the segment from `from` to node `i` passes its corner tangentially: its line
+    /// does not cut into the corner's occupied cell (within 45 degrees of the diagonal into
+    /// the cell, either way, it would). A shortest path arrives at a corner only so.
+    pub fn tangent(&self, i: usize, from: Point) -> bool {
+        let c = self.corner(i);
+        if c >= NO_CORNER {
+            return true;
+        }
+        let Some(n) = self.node(i) else {
+            return false;
+        };
+        let (ex, ey) = (n.x - from.x, n.y - from.y);
+        let dx = if c & 1 != 0 { 1.0 } else { -1.0 };
+        let dy = if c & 2 != 0 { 1.0 } else { -1.0 };
+        let along = libm::fabsf(ex * dx + ey * dy);
+        along * along <= (ex * ex + ey * ey) * 1.0001
+    }
+}
+
+/// Writes a roadmap (module docs) of the map `grid` (the planner's [`crate::Map::metric_grid`]:
+/// its hash, size and cell size are recorded) into `out`; returns the bytes written. Nodes
+/// come in order of `x`. `first` has one entry
+/// per node and one more (each node's edges start there in `far`; the last is `far.len()`);
+/// every edge is listed from both ends. Errors as [`Roadmap::from_bytes`] would refuse it, or
+/// [`RoadmapError::Truncated`] when `out` is shorter than [`bytes_needed`].
+pub fn write(
+    grid: &crate::map::OccupancyGrid<'_>,
+    nodes: &[Point],
+    corners: &[u8],
+    first: &[u32],
+    far: &[u16],
+    out: &mut [u8],
+) -> Result<usize, RoadmapError> {
+    let n = bytes_needed(nodes.len(), far.len());
+    if corners.len() != nodes.len() || first.len() != nodes.len().saturating_add(1) {
+        return Err(RoadmapError::BadHeader);
+    }
+    let out = out.get_mut(..n).ok_or(RoadmapError::Truncated)?;
+    out.fill(0);
+    let mut at = 0usize;
+    let mut put = |b: &[u8]| {
+        let end = at.saturating_add(b.len());
+        if let Some(s) = out.get_mut(at..end) {
+            s.copy_from_slice(b);
+        }
+        at = end;
+    };
+    put(&MAGIC);
+    put(&VERSION.to_le_bytes());
+    put(&0u16.to_le_bytes());
+    put(&crate::metric::map_hash(grid)
+        .ok_or(RoadmapError::BadHeader)?
+        .to_le_bytes());
+    put(&grid.cols().to_le_bytes());
+    put(&grid.rows().to_le_bytes());
+    put(&grid.cell_size().to_bits().to_le_bytes());
+    put(&u32::try_from(nodes.len()).unwrap_or(u32::MAX).to_le_bytes());
+    put(&u32::try_from(far.len()).unwrap_or(u32::MAX).to_le_bytes());
+    for p in nodes {
+        put(&p.x.to_bits().to_le_bytes());
+        put(&p.y.to_bits().to_le_bytes());
+    }
+    put(corners);
+    let pad = pad4(corners.len()).saturating_sub(corners.len());
+    put([0u8; 3].get(..pad).unwrap_or_default());
+    for f in first {
+        put(&f.to_le_bytes());
+    }
+    for j in far {
+        put(&j.to_le_bytes());
+    }
+    Roadmap::from_bytes(out)?;
+    Ok(n)
+}
+
+/// The search's scratch: the unused slots of an arena (module docs), one entry per roadmap
+/// node in each array.
+pub(crate) struct Scratch<'s> {
+    /// Best known distance from the root (`x`) and the open set's key, that distance plus the
+    /// straight distance to the goal (`y`).
+    pub g: &'s mut [Point],
+    /// The node it was reached from (`u16::MAX`: a node the root attached to).
+    pub parent: &'s mut [u16],
+    /// The open set's binary heap of node ids.
+    pub heap: &'s mut [u16],
+    /// Each node's heap slot plus one; 0 never opened, `u16::MAX` closed.
+    pub slot: &'s mut [u16],
+}
+
+const CLOSED: u16 = u16::MAX;
+
+const UNSEEN: Point = Point::new(f32::INFINITY, f32::INFINITY);
+
+impl Scratch<'_> {
+    fn key(&self, i: u16) -> f32 {
+        rd(self.g, usize::from(i), UNSEEN).y
+    }
+
+    fn dist(&self, i: usize) -> f32 {
+        rd(self.g, i, UNSEEN).x
+    }
+
+    /// Moves heap entry `k` up or down to its place (`len` entries).
+    fn sift(&mut self, mut k: usize, len: usize) {
+        // Up.
+        while k > 0 {
+            let up = k.saturating_sub(1) >> 1;
+            let (a, b) = (rd(self.heap, k, 0), rd(self.heap, up, 0));
+            if self.key(a) >= self.key(b) {
+                break;
+            }
+            self.swap(k, up);
+            k = up;
+        }
+        // Down.
+        loop {
+            let l = k.saturating_mul(2).saturating_add(1);
+            if l >= len {
+                break;
+            }
+            let r = l.saturating_add(1);
+            let mut m = l;
+            if r < len && self.key(rd(self.heap, r, 0)) < self.key(rd(self.heap, l, 0)) {
+                m = r;
+            }
+            if self.key(rd(self.heap, m, 0)) >= self.key(rd(self.heap, k, 0)) {
+                break;
+            }
+            self.swap(k, m);
+            k = m;
+        }
+    }
+
+    fn swap(&mut self, a: usize, b: usize) {
+        let (x, y) = (rd(self.heap, a, 0), rd(self.heap, b, 0));
+        wr(self.heap, a, y);
+        wr(self.heap, b, x);
+        wr(self.slot, usize::from(y), slot_of(a));
+        wr(self.slot, usize::from(x), slot_of(b));
+    }
+}
+
+fn slot_of(k: usize) -> u16 {
+    u16::try_from(k.saturating_add(1)).unwrap_or(CLOSED)
+}
+
+/// The nodes of `rm` that `p` sees over a free segment tangent at the node, nearest first,
+/// with their distances: the [`ATTACH_CANDIDATES`] nearest tangent nodes are tested, at most
+/// [`ATTACH`] kept. The nodes come in order of `x`: the scan starts at `p.x` and widens both
+/// ways until a column of nodes is farther in `x` alone than the farthest candidate kept.
+#[inline(never)]
+fn attach<M: Metric, C: Clock + ?Sized, const K: usize>(
+    rm: &Roadmap<'_>,
+    env: &Env<'_, '_, M, K>,
+    p: Point,
+    meter: &Meter<'_, C>,
+) -> heapless::Vec<(u16, f32), ATTACH> {
+    let mut near: heapless::Vec<(f32, u16), ATTACH_CANDIDATES> = heapless::Vec::new();
+    let x = |i: usize| rm.node(i).map_or(f32::INFINITY, |n| n.x);
+    // The first node with x >= p.x.
+    let (mut lo, mut hi) = (0usize, rm.len());
+    while lo < hi {
+        let mid = lo.saturating_add(hi.saturating_sub(lo) >> 1);
+        if x(mid) < p.x {
+            lo = mid.saturating_add(1);
+        } else {
+            hi = mid;
+        }
+    }
+    let (mut right, mut left) = (lo, lo);
+    let mut visited = 0u32;
+    loop {
+        let worst = if near.is_full() {
+            near.last().map_or(f32::INFINITY, |&(d, _)| d)
+        } else {
+            f32::INFINITY
+        };
+        let dr = (right < rm.len()).then(|| x(right) - p.x);
+        let dl = (left > 0).then(|| p.x - x(left.saturating_sub(1)));
+        let i = match (dr, dl) {
+            (Some(a), Some(b)) if a <= b && a * a <= worst => {
+                right = right.saturating_add(1);
+                right.saturating_sub(1)
+            }
+            (Some(a), None) if a * a <= worst => {
+                right = right.saturating_add(1);
+                right.saturating_sub(1)
+            }
+            (_, Some(b)) if b * b <= worst => {
+                left = left.saturating_sub(1);
+                left
+            }
+            _ => break,
+        };
+        visited = visited.saturating_add(1);
+        let Some(n) = rm.node(i) else { continue };
+        let d2 = n.dist_sq(p);
+        if d2 > worst || !rm.tangent(i, p) {
+            continue;
+        }
+        let at = near.partition_point(|&(d, _)| d <= d2);
+        if at < ATTACH_CANDIDATES {
+            if near.is_full() {
+                near.pop();
+            }
+            let _ = near.insert(at, (d2, u16::try_from(i).unwrap_or(u16::MAX)));
+        }
+    }
+    meter.charge((visited >> 2).saturating_add(4));
+    let mut seen = heapless::Vec::new();
+    for &(d2, i) in &near {
+        if seen.is_full() || meter.expired(&env.call) {
+            break;
+        }
+        if let Some(n) = rm.node(usize::from(i))
+            && env.free(p, n, meter)
+        {
+            let _ = seen.push((i, crate::geometry::sqrt(d2)));
+        }
+    }
+    seen
+}
+
+/// Weighted A* ([`WEIGHT`]) over the roadmap from `start` (the forward tree's root) to `goal`, in the arena slots
+/// `s` (at least [`Roadmap::len`] entries each). On success `path` holds the path's nodes from
+/// the goal's end to the root's, each consecutive pair an edge of the roadmap, the first seen
+/// from the goal and the last from the root over free segments (the edges between them are
+/// not tested here). Bounded: each node is closed once, and the search stops at the call's
+/// deadline.
+#[inline(never)]
+pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
+    rm: &Roadmap<'_>,
+    env: &Env<'_, '_, M, K>,
+    start: Point,
+    goal: Point,
+    s: &mut Scratch<'_>,
+    meter: &Meter<'_, C>,
+    path: &mut heapless::Vec<u16, PATH_MAX>,
+) -> bool {
+    path.clear();
+    let n = rm.len();
+    if n == 0 || s.g.len() < n || s.parent.len() < n || s.heap.len() < n || s.slot.len() < n {
+        return false;
+    }
+    let ends = attach(rm, env, goal, meter);
+    if ends.is_empty() {
+        return false;
+    }
+    let starts = attach(rm, env, start, meter);
+    if starts.is_empty() {
+        return false;
+    }
+    for i in 0..n {
+        wr(s.g, i, UNSEEN);
+        wr(s.slot, i, 0);
+    }
+    meter.charge(units(n >> 3).saturating_add(1));
+    let h = |p: Point| WEIGHT * p.dist(goal);
+    let mut len = 0usize;
+    for &(i, d) in &starts {
+        let iu = usize::from(i);
+        let Some(p) = rm.node(iu) else { continue };
+        wr(s.g, iu, Point::new(d, d + h(p)));
+        wr(s.parent, iu, u16::MAX);
+        wr(s.heap, len, i);
+        wr(s.slot, iu, slot_of(len));
+        len = len.saturating_add(1);
+        s.sift(len.saturating_sub(1), len);
+    }
+    let mut best = (f32::INFINITY, u16::MAX);
+    while len > 0 {
+        if meter.expired(&env.call) {
+            return false;
+        }
+        let i = rd(s.heap, 0, 0);
+        if s.key(i) >= best.0 {
+            break;
+        }
+        // Pop the top.
+        len = len.saturating_sub(1);
+        s.swap(0, len);
+        wr(s.slot, usize::from(i), CLOSED);
+        s.sift(0, len);
+        let iu = usize::from(i);
+        let gi = s.dist(iu);
+        if let Some(&(_, d)) = ends.iter().find(|&&(e, _)| e == i)
+            && gi + d < best.0
+        {
+            best = (gi + d, i);
+        }
+        let Some(pi) = rm.node(iu) else { continue };
+        let mut work = 2u32;
+        for j in rm.neighbours(iu) {
+            work = work.saturating_add(1);
+            let Ok(ju) = u16::try_from(j) else { continue };
+            let sj = rd(s.slot, j, CLOSED);
+            if sj == CLOSED {
+                continue;
+            }
+            // Only a shorter way counts: skip the square root when the squares tell.
+            let gj = s.dist(j);
+            if gj <= gi {
+                continue;
+            }
+            let Some(pj) = rm.node(j) else { continue };
+            let d2 = pi.dist_sq(pj);
+            if gj.is_finite() && d2 >= (gj - gi) * (gj - gi) {
+                continue;
+            }
+            let nd = gi + crate::geometry::sqrt(d2);
+            if nd < gj {
+                wr(s.g, j, Point::new(nd, nd + h(pj)));
+                wr(s.parent, j, i);
+                if sj == 0 {
+                    wr(s.heap, len, ju);
+                    wr(s.slot, j, slot_of(len));
+                    len = len.saturating_add(1);
+                    s.sift(len.saturating_sub(1), len);
+                } else {
+                    s.sift(usize::from(sj).saturating_sub(1), len);
+                }
+            }
+        }
+        meter.charge(work);
+    }
+    if best.1 == u16::MAX {
+        return false;
+    }
+    let mut at = best.1;
+    while at != u16::MAX {
+        if path.push(at).is_err() {
+            path.clear();
+            return false;
+        }
+        at = rd(s.parent, usize::from(at), u16::MAX);
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests;

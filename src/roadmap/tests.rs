@@ -1,0 +1,251 @@
+//! The roadmap's unit tests: its format, its search and the planner's use of it.
+
+use super::*;
+use crate::clock::FakeClock;
+use crate::error::RoadmapError;
+use crate::map::{Circle, Map, OccupancyGrid, pack_grid};
+use crate::metric::{Euclidean, map_hash};
+use crate::planner::{Planner, Status, Storage};
+use crate::{Config, Point};
+use rand_core::SeedableRng;
+
+const COLS: u16 = 20;
+const ROWS: u16 = 20;
+const BYTES: usize = OccupancyGrid::bytes_needed(COLS, ROWS);
+
+/// A 20 m map, 1 m cells, a wall along column 10 from the top (row 0) to row 15: from
+/// (5.5, 5.5) to (15.5, 5.5) the way goes round the wall's end.
+fn wall_bits() -> [u8; BYTES] {
+    let mut bits = [0u8; BYTES];
+    pack_grid(&mut bits, COLS, ROWS, |c, r| c == 10 && r <= 15).unwrap();
+    bits
+}
+
+const START: Point = Point::new(5.5, 5.5);
+const GOAL: Point = Point::new(15.5, 5.5);
+
+/// The roadmap of the wall map: a node 0.6 cells off each convex corner of the wall's end
+/// (the vertices (10, 16) and (11, 16)), an edge between them, written for `grid`.
+fn wall_roadmap(grid: &OccupancyGrid<'_>, out: &mut [u8]) -> usize {
+    let nodes = [Point::new(9.4, 16.6), Point::new(11.6, 16.6)];
+    // Diagonals into the occupied cell (10, 15): (+1, -1) and (-1, -1).
+    let corners = [1u8, 0];
+    write(grid, &nodes, &corners, &[0, 1, 2], &[1, 0], out).unwrap()
+}
+
+#[test]
+fn a_roadmap_reads_back_what_was_written() {
+    let bits = wall_bits();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 256];
+    let n = wall_roadmap(&grid, &mut buf);
+    assert_eq!(n, bytes_needed(2, 2));
+    let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+    assert_eq!((rm.len(), rm.edges()), (2, 1));
+    assert_eq!(rm.node(1), Some(Point::new(11.6, 16.6)));
+    assert_eq!(rm.neighbours(0).collect::<heapless::Vec<_, 4>>(), [1]);
+    assert_eq!(rm.map_hash(), map_hash(&grid).unwrap());
+    // Tangency: along the wall's end, yes; into the wall's cell along its diagonal, no.
+    assert!(rm.tangent(0, Point::new(11.6, 16.6)));
+    assert!(!rm.tangent(0, Point::new(8.4, 17.6)));
+}
+
+#[test]
+fn a_damaged_roadmap_is_refused_with_its_reason() {
+    let bits = wall_bits();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 256];
+    let n = wall_roadmap(&grid, &mut buf);
+    let good = &buf[..n];
+    assert_eq!(
+        Roadmap::from_bytes(&good[..10]).err(),
+        Some(RoadmapError::Truncated)
+    );
+    assert_eq!(
+        Roadmap::from_bytes(&good[..n - 4]).err(),
+        Some(RoadmapError::Truncated)
+    );
+    let mut bad = [0u8; 256];
+    bad[..n].copy_from_slice(good);
+    bad[0] = b'X';
+    assert_eq!(
+        Roadmap::from_bytes(&bad[..n]).err(),
+        Some(RoadmapError::BadMagic)
+    );
+    bad[..n].copy_from_slice(good);
+    bad[4] = 9;
+    assert_eq!(
+        Roadmap::from_bytes(&bad[..n]).err(),
+        Some(RoadmapError::UnsupportedVersion)
+    );
+    // An edge to a node that does not exist (the last two bytes name node 0's neighbour).
+    bad[..n].copy_from_slice(good);
+    let far = n - 4;
+    bad[far..far + 2].copy_from_slice(&7u16.to_le_bytes());
+    assert_eq!(
+        Roadmap::from_bytes(&bad[..n]).err(),
+        Some(RoadmapError::BadHeader)
+    );
+    // A position that is not finite.
+    bad[..n].copy_from_slice(good);
+    bad[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&f32::NAN.to_bits().to_le_bytes());
+    assert_eq!(
+        Roadmap::from_bytes(&bad[..n]).err(),
+        Some(RoadmapError::BadHeader)
+    );
+    // Every prefix and every single-byte change is refused or read without a panic.
+    for cut in 0..n {
+        let _ = Roadmap::from_bytes(&good[..cut]);
+    }
+    for at in 0..n {
+        bad[..n].copy_from_slice(good);
+        bad[at] ^= 0xa5;
+        if let Ok(rm) = Roadmap::from_bytes(&bad[..n]) {
+            for i in 0..rm.len() {
+                let _ = rm.neighbours(i).count();
+            }
+        }
+    }
+}
+
+fn planner_on<'s, 'm>(
+    storage: &'s mut Storage<64, 16>,
+    map: Map<'m, 2>,
+    cfg: Config,
+) -> Planner<'s, 'm, Euclidean, rand_xorshift::XorShiftRng, 64, 16, 2> {
+    let rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
+    Planner::new(storage, map, Euclidean, rng, cfg, START).unwrap()
+}
+
+/// With the roadmap, the goal joins in the first call over the roadmap's path (start, both
+/// corner nodes, goal), before any expansion could; every edge of the path is free; the agent
+/// then drives it to the goal.
+#[test]
+fn the_goal_joins_over_the_roadmap_in_the_first_call() {
+    let bits = wall_bits();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 256];
+    let n = wall_roadmap(&grid, &mut buf);
+    let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+    for bidirectional in [true, false] {
+        let mut storage = Storage::<64, 16>::new();
+        let mut cfg = Config::default().for_grid(&grid);
+        cfg.bidirectional = bidirectional;
+        cfg.budget.max_expansions = 1;
+        let mut p = planner_on(&mut storage, Map::new(grid), cfg);
+        p.set_roadmap(Some(rm)).unwrap();
+        p.set_goal(GOAL).unwrap();
+        let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+        let progress = p.plan(&clock, START).unwrap();
+        assert!(progress.goal_in_tree, "bidirectional {bidirectional}");
+        assert!(p.stats().roadmap);
+        let mut path = [Point::ZERO; 16];
+        let info = p.path(&mut path).unwrap();
+        assert!(info.to_goal && !info.blocked);
+        let path = &path[..info.len];
+        // The first path is the roadmap's (rewiring in the same call may shorten it since).
+        let (a, b) = (Point::new(9.4, 16.6), Point::new(11.6, 16.6));
+        let want = START.dist(a) + a.dist(b) + b.dist(GOAL);
+        let first = p.stats().first_cost.unwrap();
+        assert!((first - want).abs() < 1e-3, "{first} vs {want}");
+        for w in path.windows(2) {
+            assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
+        }
+        if !bidirectional {
+            assert_eq!(
+                p.reverse_tree().len(),
+                0,
+                "the borrowed reverse arena is emptied"
+            );
+        }
+        let mut agent = progress.waypoint;
+        let mut arrived = false;
+        for _ in 0..200 {
+            let progress = p.plan(&clock, agent).unwrap();
+            assert!(p.map().free_path(agent, progress.waypoint));
+            agent = agent.step_towards(progress.waypoint, 0.7);
+            if progress.status == Status::Arrived {
+                arrived = true;
+                break;
+            }
+        }
+        assert!(arrived, "bidirectional {bidirectional}");
+    }
+}
+
+/// A disc on the roadmap's edge: the path found is tested, refused, and the trees search as
+/// they would have (nothing of the roadmap kept); the goal still joins.
+#[test]
+fn a_blocked_roadmap_path_is_dropped_and_the_trees_search() {
+    let bits = wall_bits();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 256];
+    let n = wall_roadmap(&grid, &mut buf);
+    let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+    let mut storage = Storage::<64, 16>::new();
+    let mut cfg = Config::default().for_grid(&grid);
+    cfg.budget.max_expansions = 1;
+    let mut p = planner_on(&mut storage, Map::new(grid), cfg);
+    p.set_roadmap(Some(rm)).unwrap();
+    p.add_obstacle(Circle::new(Point::new(10.5, 16.6), 0.3))
+        .unwrap();
+    p.set_goal(GOAL).unwrap();
+    let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+    let progress = p.plan(&clock, START).unwrap();
+    assert!(!p.stats().roadmap);
+    assert!(!progress.goal_in_tree);
+    let rev = p.reverse_tree();
+    let roadmap_nodes = [Point::new(9.4, 16.6), Point::new(11.6, 16.6)];
+    assert!(
+        rev.ids()
+            .all(|i| !roadmap_nodes.contains(&rev.position(i).unwrap())),
+        "no roadmap node kept"
+    );
+    let mut agent = START;
+    for _ in 0..400 {
+        let progress = p.plan(&clock, agent).unwrap();
+        assert!(p.map().free_path(agent, progress.waypoint));
+        agent = agent.step_towards(progress.waypoint, 0.7);
+        if progress.status == Status::Arrived {
+            return;
+        }
+    }
+    panic!("the trees did not reach the goal");
+}
+
+/// A roadmap of another map, or one with more nodes than the reverse arena has free slots,
+/// is refused with its reason; the paper's configuration (tactic off) ignores a roadmap.
+#[test]
+fn a_roadmap_of_another_map_or_too_large_is_refused() {
+    let bits = wall_bits();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let mut other_bits = [0u8; BYTES];
+    pack_grid(&mut other_bits, COLS, ROWS, |c, r| c == 9 && r <= 15).unwrap();
+    let other = OccupancyGrid::new(&other_bits, COLS, ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 256];
+    let n = wall_roadmap(&other, &mut buf);
+    let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+    let mut storage = Storage::<64, 16>::new();
+    let cfg = Config::default().for_grid(&grid);
+    let mut p = planner_on(&mut storage, Map::new(grid), cfg);
+    assert_eq!(p.set_roadmap(Some(rm)), Err(RoadmapError::WrongMap));
+    // 64 nodes in a row: one more than the arena's free slots.
+    let nodes: [Point; 64] = core::array::from_fn(|i| Point::new(0.5 + 0.25 * i as f32, 19.5));
+    let first = [0u32; 65];
+    let mut big = [0u8; 1024];
+    let n = write(&grid, &nodes, &[NO_CORNER; 64], &first, &[], &mut big).unwrap();
+    let rm = Roadmap::from_bytes(&big[..n]).unwrap();
+    assert_eq!(p.set_roadmap(Some(rm)), Err(RoadmapError::TooLarge));
+    // The paper's planner ignores a roadmap.
+    let n = wall_roadmap(&grid, &mut buf);
+    let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+    let mut storage = Storage::<64, 16>::new();
+    let mut cfg = Config::paper().for_grid(&grid);
+    cfg.budget.max_expansions = 1;
+    let mut p = planner_on(&mut storage, Map::new(grid), cfg);
+    p.set_roadmap(Some(rm)).unwrap();
+    p.set_goal(GOAL).unwrap();
+    let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+    p.plan(&clock, START).unwrap();
+    assert!(!p.stats().roadmap);
+}
