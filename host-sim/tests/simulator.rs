@@ -1893,3 +1893,73 @@ fn docs_links_land() {
         broken.join("\n")
     );
 }
+
+/// The roadmap (issue 42): baked for each built-in scenario, it gives the tuned planner every
+/// leg's first path in the first call (the straight segment or the roadmap's), every edge of
+/// which is free; the paper's planner (tactic off) does not use it; a roadmap baked for one
+/// map is refused by a planner on another.
+#[test]
+fn the_roadmap_gives_every_leg_its_first_path_in_the_first_call() {
+    use bi_am_rrt::clock::FakeClock;
+    let mut legs = 0;
+    for s in host_sim::scenario::builtin_scenarios() {
+        let prep = host_sim::sim::Prepared::new(s);
+        let baked = prep.roadmap().unwrap();
+        assert!(
+            baked.nodes > 0 || prep.scenario.name == "open",
+            "{}",
+            prep.scenario.name
+        );
+        let mut from = prep.scenario.start;
+        for &goal in &prep.scenario.goals {
+            let tuned = prep.fit(host_sim::sim::planners::parse_planners("tuned").unwrap()[0]);
+            host_sim::sim::with_planner_at::<2048, _>(&prep, tuned, 1, from, |p| {
+                p.set_goal(goal).unwrap();
+                let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+                p.set_t_exp(std::time::Duration::from_millis(5)).unwrap();
+                let progress = p.grow(&clock);
+                assert!(progress.goal_in_tree, "{} to {goal:?}", prep.scenario.name);
+                assert!(
+                    p.stats().roadmap,
+                    "joined over the roadmap or the straight segment"
+                );
+                let mut path = vec![bi_am_rrt::Point::ZERO; 2048];
+                let info = p.path(&mut path).unwrap();
+                assert!(info.to_goal && !info.blocked);
+                for w in path[..info.len].windows(2) {
+                    assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
+                }
+                Ok(())
+            })
+            .unwrap();
+            let paper = prep.fit(host_sim::sim::planners::parse_planners("paper").unwrap()[0]);
+            host_sim::sim::with_planner_at::<2048, _>(&prep, paper, 1, from, |p| {
+                p.set_goal(goal).unwrap();
+                let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+                p.grow(&clock);
+                assert!(!p.stats().roadmap, "the paper's planner has no roadmap");
+                Ok(())
+            })
+            .unwrap();
+            from = goal;
+            legs += 1;
+        }
+    }
+    assert!(legs >= 9, "{legs} legs");
+    // Another map's roadmap is refused.
+    let maze = host_sim::sim::Prepared::new(host_sim::scenario::builtin_by_name("maze").unwrap());
+    let bug =
+        host_sim::sim::Prepared::new(host_sim::scenario::builtin_by_name("bug_trap").unwrap());
+    // (The planner handed to the closure takes a roadmap of any lifetime: 'static bytes.)
+    let bytes: &'static [u8] = Box::leak(maze.roadmap().unwrap().bytes.clone().into_boxed_slice());
+    let rm = bi_am_rrt::roadmap::Roadmap::from_bytes(bytes).unwrap();
+    let tuned = bug.fit(host_sim::sim::planners::parse_planners("tuned").unwrap()[0]);
+    host_sim::sim::with_planner_at::<2048, _>(&bug, tuned, 1, bug.scenario.start, |p| {
+        assert_eq!(
+            p.set_roadmap(Some(rm)),
+            Err(bi_am_rrt::error::RoadmapError::WrongMap)
+        );
+        Ok(())
+    })
+    .unwrap();
+}

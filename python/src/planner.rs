@@ -103,7 +103,11 @@ fn build<const N: usize>(
             cfg.robot_radius = prep.scenario.robot_radius;
             cfg.clearance_weight = prep.scenario.clearance_weight();
             let rng = XorShiftRng::seed_from_u64(seed);
-            bi_am_rrt::Planner::new(storage, map, metric, rng, cfg, start).map_err(Refused::Setup)
+            let mut planner = bi_am_rrt::Planner::new(storage, map, metric, rng, cfg, start)
+                .map_err(Refused::Setup)?;
+            // The scenario's roadmap, as host-sim attaches it (the tuned `roadmap` tactic).
+            prep.attach_roadmap(&mut planner);
+            Ok(planner)
         },
     }
     .try_build()
