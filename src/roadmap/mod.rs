@@ -5,18 +5,19 @@
 //! can be baked, as the assisting metric's table is: a reduced visibility graph, a node just
 //! off each convex corner of the occupied cells and an edge between two nodes that see each
 //! other over a segment tangent to the obstacle at both ends (a shortest path bends only at
-//! convex corners; `host-sim` bakes it, `host-sim export` writes it as flash data).
+//! convex corners). `host-sim` bakes it (`host_sim::metric::roadmap`); [`write()`] makes the
+//! bytes anywhere, and they can sit in flash (`host-sim export` does not write them yet).
 //!
-//! When a goal is set, the planner's first call searches the roadmap once ([`find_path`]):
-//! the root and the goal each attach to the nearest nodes they see (tangent at the node), A*
-//! (Euclidean heuristic) joins them, every edge of the path found is tested free as any tree
-//! edge is (the dynamic obstacles, live cells and the robot's body count), and the path
+//! When a goal is set, the planner's first step (the `roadmap` tactic, [`crate::Tactics`])
+//! joins the goal over the straight segment when it is free, else searches the roadmap once
+//! (`find_path`): the root and the goal each attach to the nearest nodes they see (tangent at
+//! the node), a weighted A* joins them, every edge of the path found is tested free as any
+//! tree edge is (the dynamic obstacles, live cells and the robot's body count), and the path
 //! becomes a branch of the reverse tree that meets the forward tree's root (paper Algorithm
 //! 1's meet and graft). From there the planner goes on as ever: rewiring shortens the path.
 //! When the roadmap has no path, an edge is blocked or the call's time runs out, nothing is
-//! kept and the trees search as they would have. The search needs no memory of its own: while
-//! the reverse tree holds only its root, its arena's unused slots are the search's scratch
-//! ([`crate::tree::Tree::spare`]).
+//! kept and the trees search as they would have. The search needs no memory of its own: the
+//! reverse arena's free slots are its scratch (`Tree::spare`).
 //!
 //! # Format (version 1, little-endian)
 //!
