@@ -228,7 +228,7 @@ error_enum! {
 }
 
 error_enum! {
-    /// Why a roadmap ([`crate::roadmap::Roadmap`]) was refused.
+    /// Why a roadmap (`roadmap::Roadmap`, feature `roadmap`) was refused.
     pub enum RoadmapError {
         /// Fewer bytes than the header, or than the sizes it announces.
         Truncated => "roadmap truncated",

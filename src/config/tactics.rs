@@ -47,9 +47,10 @@ pub struct Tactics {
     /// a segment test for the frontier (each rewire still tests its own segment): a quarter
     /// more expansions on a fine map, where that test was most of the sweep's work.
     pub open_frontier: bool,
-    /// With a roadmap attached ([`crate::Planner::set_roadmap`], feature `roadmap`), a new
-    /// goal's first call searches it for a path and grafts it as the first solution (module
-    /// `roadmap`); the trees search as ever when it has none. Without a roadmap it does nothing.
+    /// With a roadmap attached (`Planner::set_roadmap`, feature `roadmap`), a new goal's
+    /// first step joins it over the straight segment when that is free, else over the
+    /// roadmap's path, grafted as the first solution (module `roadmap`); the trees search as
+    /// ever when it has none. Without a roadmap it does nothing.
     pub roadmap: bool,
 }
 

@@ -293,7 +293,8 @@ pub struct Stats {
     pub reanchored: u32,
     /// Times no tree node could reach the agent and the forward tree restarted from it.
     pub restarted: u32,
-    /// Whether the goal joined over the attached roadmap's path (module [`crate::roadmap`]).
+    /// Whether the goal joined in the `roadmap` tactic's first step: over the straight
+    /// segment or the attached roadmap's path (module [`crate::roadmap`]).
     #[cfg(feature = "roadmap")]
     pub roadmap: bool,
     /// States let in by the starving rule (a search whose density rule had turned away
