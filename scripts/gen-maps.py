@@ -10,6 +10,12 @@ and a scenario file (nothing is committed):
 - maze129, maze511: perfect mazes of 1-cell corridors (depth-first carving), 1 m cells,
   start and goals in the corners;
 - city1024: 1,024 x 1,024 cells of 1 m with 900 rectangular blocks of 8-40 cells a side;
+- clutter512-10, clutter512-40: 512 x 512 cells of 1 m with 10 % and 40 % of the cells blocked
+  at random (the MovingAI random maps), start and goals on the largest 4-connected free piece
+  nearest the corners;
+- rooms512: 512 x 512 cells at 0.25 m (128 m), rooms of 16 x 16 cells behind 1-cell walls, 1 m
+  doors (4 cells) on a spanning tree of the rooms and on a third of the other walls (the
+  MovingAI room maps);
 - house384, house500: small buildings drawn like SLAM maps at 0.05 m (as rooms4096 below,
   19.2 and 25 m a side), the size of the small SLAM maps of issue 42;
 - with --big (issue 42's "any map up to 4096 x 4096 cells"): maze2047 and maze4095, mazes of
@@ -134,6 +140,78 @@ def city(w, blocks, seed):
     return g
 
 
+def clutter(w, p, seed):
+    """Random blocked cells; returns the grid and the cells of its largest 4-connected free
+    piece nearest each corner (top-left, bottom-right, bottom-left, top-right)."""
+    rng = random.Random(seed)
+    g = [[1 if rng.random() < p else 0 for _ in range(w)] for _ in range(w)]
+    label = [[0] * w for _ in range(w)]
+    best, best_n, n_label = 0, 0, 0
+    for y0 in range(w):
+        for x0 in range(w):
+            if g[y0][x0] or label[y0][x0]:
+                continue
+            n_label += 1
+            label[y0][x0] = n_label
+            stack, n = [(x0, y0)], 0
+            while stack:
+                x, y = stack.pop()
+                n += 1
+                for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
+                    if 0 <= nx < w and 0 <= ny < w and not g[ny][nx] and not label[ny][nx]:
+                        label[ny][nx] = n_label
+                        stack.append((nx, ny))
+            if n > best_n:
+                best, best_n = n_label, n
+    ends = []
+    for cx, cy in [(0, 0), (w - 1, w - 1), (0, w - 1), (w - 1, 0)]:
+        ends.append(
+            min(
+                ((x, y) for y in range(w) for x in range(w) if label[y][x] == best),
+                key=lambda c: (c[0] - cx) ** 2 + (c[1] - cy) ** 2,
+            )
+        )
+    return g, ends
+
+
+def room_grid(w, room, door, seed):
+    """Rooms of `room` x `room` cells behind 1-cell walls; a door of `door` cells in every wall
+    of a random spanning tree of the rooms and in a third of the others."""
+    rng = random.Random(seed)
+    n = (w - 1) // (room + 1)
+    g = [[0] * w for _ in range(w)]
+    for i in range(w):
+        for j in range(0, w, room + 1):
+            g[i][j] = g[j][i] = 1
+    for j in range(w):
+        g[w - 1][j] = g[j][w - 1] = 1
+    parent = list(range(n * n))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    walls = [(x, y, dx, dy) for y in range(n) for x in range(n) for dx, dy in ((1, 0), (0, 1))
+             if x + dx < n and y + dy < n]
+    rng.shuffle(walls)
+    for x, y, dx, dy in walls:
+        a, b = find(y * n + x), find((y + dy) * n + x + dx)
+        if a != b or rng.random() < 1 / 3:
+            parent[a] = b
+            off = 1 + rng.randint(0, room - door)
+            if dx:
+                wx = (x + 1) * (room + 1)
+                for k in range(door):
+                    g[y * (room + 1) + off + k][wx] = 0
+            else:
+                wy = (y + 1) * (room + 1)
+                for k in range(door):
+                    g[wy][x * (room + 1) + off + k] = 0
+    return g
+
+
 def main():
     args = [a for a in sys.argv[1:] if a != "--big"]
     if len(args) != 1:
@@ -153,6 +231,16 @@ def main():
     g = city(1024, 900, 11)
     png(out / "city1024.png", g)
     scenarios.append(("city1024", [2.5, 2.5], [[1021.5, 1021.5], [2.5, 1021.5], [1021.5, 2.5]]))
+    for name, p, seed in [("clutter512-10", 0.1, 21), ("clutter512-40", 0.4, 23)]:
+        g, ends = clutter(512, p, seed)
+        png(out / f"{name}.png", g)
+        m = [[x + 0.5, y + 0.5] for x, y in ends]
+        scenarios.append((name, m[0], m[1:]))
+    g = room_grid(512, 16, 4, 29)
+    png(out / "rooms512.png", g)
+    m = [[round((x + 0.5) * 0.25, 3), round((y + 0.5) * 0.25, 3)]
+         for x, y in [(3, 3), (507, 507), (3, 507), (507, 3)]]
+    scenarios.append(("rooms512", m[0], m[1:], 0.25))
     buildings = [("house384", 384, 17), ("house500", 500, 19)]
     if big:
         buildings.append(("rooms4096", 4096, 13))

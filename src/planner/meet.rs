@@ -71,31 +71,21 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call,
         };
         let one_tree = self.rev_goal.is_none();
-        // The goal in sight: the straight segment is the path (no search).
-        if env.free(root, goal.pos, meter) {
-            if one_tree {
-                self.rev.reset(goal.pos);
-            }
-            let (Some(a), Some(b)) = (self.fwd.tree.root(), self.rev.tree.root()) else {
-                return false;
-            };
-            let met = self.meet(a, b, meter);
-            if one_tree {
-                self.rev.clear();
-            }
-            self.stats.roadmap = met;
-            return met;
-        }
+        // The roadmap's nodes from the goal's end to the root's, the ends left out; empty
+        // when the goal is in sight: the straight segment is then the path (no search).
         let mut path = heapless::Vec::new();
-        let (g, parent, heap, slot) = self.rev.tree.spare();
-        let mut scratch = crate::roadmap::Scratch {
-            g,
-            parent,
-            heap,
-            slot,
-        };
-        if !crate::roadmap::find_path(&rm, &env, root, goal.pos, &mut scratch, meter, &mut path) {
-            return false;
+        if !env.free(root, goal.pos, meter) {
+            let (g, parent, heap, slot) = self.rev.tree.spare();
+            let mut scratch = crate::roadmap::Scratch {
+                g,
+                parent,
+                heap,
+                slot,
+            };
+            if !crate::roadmap::find_path(&rm, &env, root, goal.pos, &mut scratch, meter, &mut path)
+            {
+                return false;
+            }
         }
         // The attaching segments were tested; the roadmap's own edges are tested here, against
         // everything the map holds now. They are free of the grid it was baked for (`fits`
@@ -116,31 +106,29 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 return false;
             }
         }
+        // The path becomes a branch of the reverse tree below its root (the goal), and the
+        // branch's last node meets the forward root.
         if one_tree {
             self.rev.reset(goal.pos);
         }
-        let Some(mut parent) = self.rev.tree.root() else {
-            return false;
-        };
-        let mut prev = goal.pos;
-        for i in &path {
-            let p = node(i);
-            let edge = env.edge(prev, p, meter);
-            match self.rev.insert(p, parent, edge) {
-                Ok(id) => parent = id,
-                Err(_) => {
-                    if one_tree {
-                        self.rev.clear();
+        let mut met = false;
+        if let (Some(a), Some(mut parent)) = (self.fwd.tree.root(), self.rev.tree.root()) {
+            let mut prev = goal.pos;
+            let mut built = true;
+            for i in &path {
+                let p = node(i);
+                let edge = env.edge(prev, p, meter);
+                match self.rev.insert(p, parent, edge) {
+                    Ok(id) => parent = id,
+                    Err(_) => {
+                        built = false;
+                        break;
                     }
-                    return false;
                 }
+                prev = p;
             }
-            prev = p;
+            met = built && self.meet(a, parent, meter);
         }
-        let Some(a) = self.fwd.tree.root() else {
-            return false;
-        };
-        let met = self.meet(a, parent, meter);
         if one_tree {
             self.rev.clear();
         }
