@@ -312,6 +312,15 @@ impl<const N: usize> Tree<N> {
         )
     }
 
+    /// The `k`-th `u16` from the end of [`Tree::spare`]'s third slice (what a roadmap search
+    /// left there, `roadmap::find_path`): read from the arena's slot `N - 1 - k`, `None` once
+    /// that slot holds a node.
+    #[cfg(feature = "roadmap")]
+    pub(crate) fn spare_from_end(&self, k: usize) -> Option<u16> {
+        let i = N.checked_sub(k)?.checked_sub(1)?;
+        (i >= usize::from(self.len)).then(|| rd(&self.first_child, i, NONE))
+    }
+
     pub(crate) fn clear_marks(&mut self, m: Mark) {
         let n = self.len();
         for f in self.flags.iter_mut().take(n) {

@@ -71,9 +71,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call,
         };
         let one_tree = self.rev_goal.is_none();
-        // The roadmap's nodes from the goal's end to the root's, the ends left out; empty
-        // when the goal is in sight: the straight segment is then the path (no search).
-        let mut path = heapless::Vec::new();
+        // The roadmap's path: its nodes from the goal's end to the root's (the ends left out),
+        // left by the search in the reverse arena's last slots; none when the goal is in
+        // sight: the straight segment is then the path (no search).
+        let mut len = 0usize;
         if !env.free(root, goal.pos, meter) {
             let (g, parent, heap, slot) = self.rev.tree.spare();
             let mut scratch = crate::roadmap::Scratch {
@@ -82,20 +83,31 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 heap,
                 slot,
             };
-            if !crate::roadmap::find_path(&rm, &env, root, goal.pos, &mut scratch, meter, &mut path)
-            {
-                return false;
+            match crate::roadmap::find_path(&rm, &env, root, goal.pos, &mut scratch, meter) {
+                Some(l) => len = l,
+                None => return false,
             }
         }
+        // The branch fills the arena's first free slots while its nodes are read from the
+        // last ones: they must not meet (a path longer than half the free slots is dropped).
+        let base = if one_tree { 1 } else { self.rev.tree.len() };
+        if base.saturating_add(len.saturating_mul(2)) > N {
+            return false;
+        }
+        let rev = &self.rev.tree;
+        let node = |k: usize| {
+            rev.spare_from_end(k)
+                .and_then(|i| rm.node(usize::from(i)))
+                .unwrap_or(goal.pos)
+        };
         // The attaching segments were tested; the roadmap's own edges are tested here, against
         // everything the map holds now. They are free of the grid it was baked for (`fits`
         // checked its cells): for a point robot on a map whose live cells mark nothing, only
         // the dynamic obstacles are left to test.
-        let node = |i: &u16| rm.node(usize::from(*i)).unwrap_or(goal.pos);
         let baked_free = self.map.radius() == 0.0 && self.map.marked_cells() == 0;
         let obstacles = units(self.map.obstacles().len());
-        for (a, b) in path.iter().zip(path.iter().skip(1)) {
-            let (a, b) = (node(a), node(b));
+        for k in 1..len {
+            let (a, b) = (node(k - 1), node(k));
             let free = if baked_free {
                 meter.charge(obstacles.saturating_add(2));
                 !self.map.obstacles().blocks_segment(a, b)
@@ -115,8 +127,17 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if let (Some(a), Some(mut parent)) = (self.fwd.tree.root(), self.rev.tree.root()) {
             let mut prev = goal.pos;
             let mut built = true;
-            for i in &path {
-                let p = node(i);
+            for k in 0..len {
+                // Read before the insertion, which may take a slot below it.
+                let Some(p) = self
+                    .rev
+                    .tree
+                    .spare_from_end(k)
+                    .and_then(|i| rm.node(usize::from(i)))
+                else {
+                    built = false;
+                    break;
+                };
                 let edge = env.edge(prev, p, meter);
                 match self.rev.insert(p, parent, edge) {
                     Ok(id) => parent = id,

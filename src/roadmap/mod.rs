@@ -6,7 +6,8 @@
 //! off each convex corner of the occupied cells and an edge between two nodes that see each
 //! other over a segment tangent to the obstacle at both ends (a shortest path bends only at
 //! convex corners). `host-sim` bakes it (`host_sim::metric::roadmap`); [`write()`] makes the
-//! bytes anywhere, and they can sit in flash (`host-sim export` does not write them yet).
+//! bytes anywhere, and they can sit in flash (`host-sim export` writes them beside the grid
+//! and the table).
 //!
 //! When a goal is set, the planner's first step (the `roadmap` tactic, [`crate::Tactics`])
 //! joins the goal over the straight segment when it is free, else searches the roadmap once
@@ -17,7 +18,9 @@
 //! 1's meet and graft). From there the planner goes on as ever: rewiring shortens the path.
 //! When the roadmap has no path, an edge is blocked or the call's time runs out, nothing is
 //! kept and the trees search as they would have. The search needs no memory of its own: the
-//! reverse arena's free slots are its scratch (`Tree::spare`).
+//! reverse arena's free slots are its scratch (`Tree::spare`), and the path it finds waits in
+//! the last of them while the branch is built in the first (a path of any length, up to half
+//! the free slots).
 //!
 //! # Format (version 1, little-endian)
 //!
@@ -60,9 +63,6 @@ const ATTACH: usize = 6;
 /// node) for a first path at most twice the roadmap's shortest (rewiring shortens it from the
 /// first call on). Measured on the reference and nav2 maps: `docs/notebook/first-solution.md`.
 const WEIGHT: f32 = 2.0;
-/// Most nodes on a roadmap path the planner keeps (a longer one is dropped: the trees search).
-pub const PATH_MAX: usize = 128;
-
 const fn pad4(n: usize) -> usize {
     n.saturating_add(3) & !3usize
 }
@@ -463,11 +463,14 @@ fn attach<M: Metric, C: Clock + ?Sized, const K: usize>(
 }
 
 /// Weighted A* ([`WEIGHT`]) over the roadmap from `start` (the forward tree's root) to `goal`, in the arena slots
-/// `s` (at least [`Roadmap::len`] entries each). On success `path` holds the path's nodes from
-/// the goal's end to the root's, each consecutive pair an edge of the roadmap, the first seen
-/// from the goal and the last from the root over free segments (the edges between them are
-/// not tested here). Bounded: each node is closed once, and the search stops at the call's
-/// deadline.
+/// `s` (at least [`Roadmap::len`] entries each). On success returns the path's length `L` in
+/// nodes and leaves them at the end of `s.heap`, the `k`-th from the goal's end at
+/// `s.heap[len - 1 - k]` (the arena's last slots: the planner reads them back there with
+/// `Tree::spare_from_end` while it fills the first ones), each consecutive pair an edge of
+/// the roadmap, the first seen from the goal and the last from the root over free segments
+/// (the edges between them are not tested here). A path of any length fits: the heap is no
+/// longer needed and has a slot per roadmap node. Bounded: each node is closed once, and the
+/// search stops at the call's deadline.
 #[inline(never)]
 pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
     rm: &Roadmap<'_>,
@@ -476,20 +479,18 @@ pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
     goal: Point,
     s: &mut Scratch<'_>,
     meter: &Meter<'_, C>,
-    path: &mut heapless::Vec<u16, PATH_MAX>,
-) -> bool {
-    path.clear();
+) -> Option<usize> {
     let n = rm.len();
     if n == 0 || s.g.len() < n || s.parent.len() < n || s.heap.len() < n || s.slot.len() < n {
-        return false;
+        return None;
     }
     let ends = attach(rm, env, goal, meter);
     if ends.is_empty() {
-        return false;
+        return None;
     }
     let starts = attach(rm, env, start, meter);
     if starts.is_empty() {
-        return false;
+        return None;
     }
     for i in 0..n {
         wr(s.g, i, UNSEEN);
@@ -511,7 +512,7 @@ pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
     let mut best = (f32::INFINITY, u16::MAX);
     while len > 0 {
         if meter.expired(&env.call) {
-            return false;
+            return None;
         }
         let i = rd(s.heap, 0, 0);
         if s.key(i) >= best.0 {
@@ -565,17 +566,22 @@ pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
         meter.charge(work);
     }
     if best.1 == u16::MAX {
-        return false;
+        return None;
     }
+    // The chain of parents, written from the heap's last slot down (at most `n` nodes: each
+    // node has one parent, set when it was opened, and the attach nodes none).
+    let end = s.heap.len();
     let mut at = best.1;
+    let mut len = 0usize;
     while at != u16::MAX {
-        if path.push(at).is_err() {
-            path.clear();
-            return false;
+        if len >= n || len >= end {
+            return None;
         }
+        wr(s.heap, end.saturating_sub(1).saturating_sub(len), at);
+        len = len.saturating_add(1);
         at = rd(s.parent, usize::from(at), u16::MAX);
     }
-    true
+    Some(len)
 }
 
 #[cfg(test)]

@@ -249,3 +249,110 @@ fn a_roadmap_of_another_map_or_too_large_is_refused() {
     p.plan(&clock, START).unwrap();
     assert!(!p.stats().roadmap);
 }
+
+/// Found on a MovingAI maze of 8-cell corridors (issue 42): its legs' roadmap paths have 164-201
+/// nodes and the search kept at most 128, so the roadmap never joined there and its search
+/// was wasted. The path now stays in the arena's last free slots, whatever its length. A comb
+/// of 70 walls, from the top and the bottom in turn (1 m cells, two free columns between
+/// them): the way zigzags round every wall's end, 140 roadmap nodes. With 512 slots a tree the
+/// goal joins over them in the first call; with 256 the branch and the path would overlap in
+/// the arena, so the path is dropped and the trees search.
+#[test]
+fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
+    const WALLS: u16 = 70;
+    const COLS: u16 = 3 * WALLS + 3;
+    const ROWS: u16 = 20;
+    const BYTES: usize = OccupancyGrid::bytes_needed(COLS, ROWS);
+    let top = |i: u16| i % 2 == 0;
+    let mut bits = [0u8; BYTES];
+    pack_grid(&mut bits, COLS, ROWS, |c, r| {
+        c >= 2 && (c - 2) % 3 == 0 && {
+            let i = (c - 2) / 3;
+            i < WALLS && if top(i) { r <= 15 } else { r >= 4 }
+        }
+    })
+    .unwrap();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    // Half a cell off each wall's end, either side of it; a chain of edges.
+    let mut nodes = [Point::ZERO; 2 * WALLS as usize];
+    for i in 0..WALLS {
+        let c = f32::from(3 * i + 2);
+        let y = if top(i) { 16.5 } else { 3.5 };
+        nodes[2 * usize::from(i)] = Point::new(c - 0.5, y);
+        nodes[2 * usize::from(i) + 1] = Point::new(c + 1.5, y);
+    }
+    let n = nodes.len();
+    let corners = [NO_CORNER; 2 * WALLS as usize];
+    let mut first = [0u32; 2 * WALLS as usize + 1];
+    let mut far = [0u16; 2 * (2 * WALLS as usize - 1)];
+    let mut e = 0usize;
+    for i in 0..n {
+        first[i] = e as u32;
+        if i > 0 {
+            far[e] = (i - 1) as u16;
+            e += 1;
+        }
+        if i + 1 < n {
+            far[e] = (i + 1) as u16;
+            e += 1;
+        }
+    }
+    first[n] = e as u32;
+    let mut buf = [0u8; 4096];
+    let len = write(&grid, &nodes, &corners, &first, &far, &mut buf).unwrap();
+    let rm = Roadmap::from_bytes(&buf[..len]).unwrap();
+    let (start, goal) = (
+        Point::new(0.5, 17.5),
+        Point::new(f32::from(COLS) - 1.5, 2.5),
+    );
+    // The start sees past the first node and the goal past the last: the shortest way over
+    // the roadmap leaves both out.
+    let inner = &nodes[1..n - 1];
+    let want = start.dist(inner[0])
+        + inner.windows(2).map(|w| w[0].dist(w[1])).sum::<f32>()
+        + inner[inner.len() - 1].dist(goal);
+    let mut cfg = Config::default().for_grid(&grid);
+    cfg.bidirectional = false;
+    cfg.budget.max_expansions = 1;
+    let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+    let rng = || rand_xorshift::XorShiftRng::seed_from_u64(3);
+    // 512 slots: the 140-node branch joins in the first call, its cost the roadmap path's.
+    let mut storage = Storage::<512, 16>::new();
+    let mut p = Planner::new(
+        &mut storage,
+        Map::<2>::new(grid),
+        Euclidean,
+        rng(),
+        cfg,
+        start,
+    )
+    .unwrap();
+    p.set_roadmap(Some(rm)).unwrap();
+    p.set_goal(goal).unwrap();
+    let progress = p.plan(&clock, start).unwrap();
+    assert!(progress.goal_in_tree && p.stats().roadmap);
+    let first_cost = p.stats().first_cost.unwrap();
+    assert!((first_cost - want).abs() < 1e-2, "{first_cost} vs {want}");
+    let mut path = [Point::ZERO; 512];
+    let info = p.path(&mut path).unwrap();
+    assert!(info.to_goal && info.len > 128, "{} nodes", info.len);
+    for w in path[..info.len].windows(2) {
+        assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
+    }
+    // 256 slots: 1 + 2 x 140 > 256, the path is dropped; the arena is left empty.
+    let mut storage = Storage::<256, 16>::new();
+    let mut p = Planner::new(
+        &mut storage,
+        Map::<2>::new(grid),
+        Euclidean,
+        rng(),
+        cfg,
+        start,
+    )
+    .unwrap();
+    p.set_roadmap(Some(rm)).unwrap();
+    p.set_goal(goal).unwrap();
+    p.plan(&clock, start).unwrap();
+    assert!(!p.stats().roadmap);
+    assert_eq!(p.reverse_tree().len(), 0);
+}
