@@ -238,6 +238,17 @@ pub fn exported_mission<C: Clock + ?Sized>(
             return false;
         }
     };
+    // The export's roadmap, flown when the core is built with its `roadmap` feature: the tuned
+    // set joins each goal over it in its first call (`set_roadmap` refuses one of another map
+    // or larger than the arena; the planner then searches without it).
+    #[cfg(feature = "roadmap")]
+    if !scenario::ROADMAP.is_empty() {
+        let attached = bi_am_rrt::roadmap::Roadmap::from_bytes(&scenario::ROADMAP)
+            .and_then(|rm| planner.set_roadmap(Some(rm)));
+        if let Err(e) = attached {
+            hprintln!("scenario: roadmap refused, flying without it: {}", e);
+        }
+    }
     let first_goal = scenario::GOALS
         .first()
         .map_or(start, |&(x, y)| Point::new(x, y));

@@ -14,7 +14,7 @@ use crate::args::*;
 pub struct Cmd {
     #[command(flatten)]
     scenarios: crate::args::ScenarioArgs,
-    /// Output folder (created): NAME.grid, NAME.table, NAME.rs, and scenario.rs (the same
+    /// Output folder (created): NAME.grid, NAME.table, NAME.roadmap, NAME.rs, and scenario.rs (the same
     /// source, which the firmware example includes).
     #[arg(long)]
     out: PathBuf,

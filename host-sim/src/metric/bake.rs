@@ -403,11 +403,17 @@ pub struct Exported {
     pub table_bytes: usize,
     /// How far the table is from full precision.
     pub error: TableError,
+    /// Bytes of the roadmap (0 when the map has none: more corners than
+    /// [`crate::metric::roadmap::MAX_NODES`]).
+    pub roadmap_bytes: usize,
+    /// Why the map has no roadmap, when it has none.
+    pub no_roadmap: Option<String>,
 }
 
 /// Writes a scenario for a firmware into `dir`: `NAME.grid` (the bit-packed grid of
-/// `bi_am_rrt::map`), `NAME.table` (its diffusion table, `table` options) and `NAME.rs`, Rust
-/// source that a firmware `include!`s: the grid and table as `static` byte arrays (flash), the
+/// `bi_am_rrt::map`), `NAME.table` (its diffusion table, `table` options), `NAME.roadmap` (its
+/// roadmap, [`crate::metric::roadmap::bake`]; empty when it has none) and `NAME.rs`, Rust
+/// source that a firmware `include!`s: grid, table and roadmap as `static` byte arrays (flash), the
 /// grid's shape, the start, the goals and `sigma`, and the firmware's mission ([`Mission`]).
 pub fn export_flash(
     sc: &crate::scenario::Scenario,
@@ -432,6 +438,21 @@ pub fn export_flash(
         write_file(&dir.join(format!("{name}.space")), space)?;
     }
     write_file(&dir.join(format!("{name}.table")), &baked.table)?;
+    // The roadmap of the first solution (core feature `roadmap`): baked on the grid the
+    // planner tests paths on, for the planner's map, as the simulator bakes it.
+    let space_grid = sc
+        .space
+        .as_ref()
+        .map_or_else(|| sc.map.grid(), |s| s.grid());
+    let (roadmap, no_roadmap) = match crate::metric::roadmap::bake(
+        &space_grid,
+        &sc.planner_map::<1>()?.metric_grid(),
+        crate::metric::roadmap::MAX_NODES,
+    ) {
+        Ok(r) => (r.bytes, None),
+        Err(e) => (Vec::new(), Some(format!("{e:#}"))),
+    };
+    write_file(&dir.join(format!("{name}.roadmap")), &roadmap)?;
     let pt = |p: bi_am_rrt::Point| format!("({:?}, {:?})", p.x, p.y);
     let goals: Vec<String> = sc.goals.iter().map(|&g| pt(g)).collect();
     let src = format!(
@@ -448,6 +469,8 @@ pub fn export_flash(
          /// The grid inflated for the robot's disc (`bi_am_rrt::map::inflate`; empty for a point).\n{}\
          /// The diffusion table (`bi_am_rrt::DiffusionTable::new`); max error {:.3e} over {} pairs, \
          largest distance {:.3e}.\n{}\
+         /// The roadmap (`bi_am_rrt::roadmap::Roadmap::from_bytes`, core feature `roadmap`; \
+         empty when the map has none).\n#[allow(dead_code)]\n{}\
          /// The mission (`host-sim export --planners`): the tuned Bi-AM-RRT*(D), or the paper's.\n\
          #[allow(dead_code)]\npub const TUNED: bool = {};\n\
          /// The mission (`--all-goals`): every goal in turn, or goal 1.\n\
@@ -472,6 +495,7 @@ pub fn export_flash(
         error.pairs,
         error.max_distance,
         static_array("TABLE", &baked.table),
+        static_array("ROADMAP", &roadmap),
         mission.tuned,
         mission.all_goals,
         mission.walkers,
@@ -486,6 +510,8 @@ pub fn export_flash(
         grid_bytes: sc.map.bits.len() + space.len(),
         table_bytes: baked.table.len(),
         error,
+        roadmap_bytes: roadmap.len(),
+        no_roadmap,
     })
 }
 
@@ -680,6 +706,13 @@ pub fn export_command(
     if let Some(w) = error_warning(e) {
         eprintln!("{w}");
     }
+    match &ex.no_roadmap {
+        None => println!(
+            "  roadmap {} bytes (flown by a firmware built with the core's `roadmap` feature)",
+            ex.roadmap_bytes
+        ),
+        Some(why) => println!("  no roadmap: {why}"),
+    }
     let data = ex.grid_bytes + ex.table_bytes;
     if data > flash_data {
         eprintln!(
@@ -689,6 +722,14 @@ pub fn export_command(
         );
     } else {
         println!("  flash data {data} of {flash_data} bytes: fits the firmware example");
+    }
+    let with_roadmap = data + ex.roadmap_bytes;
+    if ex.roadmap_bytes > 0 && with_roadmap > flash_data && data <= flash_data {
+        println!(
+            "  with the roadmap {with_roadmap} bytes, over the {flash_data}: a firmware that flies \
+             it needs --max-bytes at most {}",
+            flash_data.saturating_sub(ex.grid_bytes + ex.roadmap_bytes)
+        );
     }
     Ok(())
 }
