@@ -11,6 +11,13 @@ const CUT_STEPS: usize = 5;
 /// A corner cut's first test reaches `1 / FIRST_PROBE_DIV` of the way along the edge.
 const FIRST_PROBE_DIV: f32 = 32.0;
 
+/// A corner cut is kept when it shortens the path by this share of a cell at least. A tenth
+/// until issue 42 left up to a tenth of a cell at each corner of the path (cost at 1 s 1.002-
+/// 1.004 x the optimum on several reference legs, where Informed RRT* reached 1.0002-1.0007);
+/// at 1/200 the residue is a few millimetres a corner on metre cells, with no fewer
+/// expansions a second (docs/notebook/tuned-default.md, "Corner cuts").
+const CUT_GAIN: f32 = 0.005;
+
 /// The largest `d` in `(0, reach]` at which `sees(d)` holds, by bisection from `reach / 32`
 /// ([`CUT_STEPS`] more tests), for the corner cuts; `None` when the first test fails or the
 /// call's deadline passes.
@@ -91,7 +98,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// [`CUT_STEPS`] tests). The way `x - q - g` is shorter than `x - p - g` (triangle
     /// inequality: `q` lies on one of the two segments), and cuts from both sides in turn
     /// close in on the corner, as a path simplifier's shortcuts place new vertices on a
-    /// path's segments. Kept only when it shortens the path by a tenth of a cell; the part of
+    /// path's segments. Kept only when it shortens the path by [`CUT_GAIN`] of a cell; the part of
     /// the old edge that `q` keeps is tested too (a rounded point may leave the line).
     /// Returns the new node.
     fn cut_corner<M: Metric, C: Clock + ?Sized, const K: usize>(
@@ -148,7 +155,7 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
     /// A corner node `p` split in two (the last corner cut, [`TreeStore::cut_corner`]): the
     /// points `a` of `p - g` and `b` of `p - x` at the same distance `d` from `p`, for the
     /// largest `d` (bisection) at which they see each other, when the way `a - b` is shorter
-    /// than `a - p - b` by a tenth of a cell and the rest of both edges, `a - g` and `b - x`,
+    /// than `a - p - b` by [`CUT_GAIN`] of a cell and the rest of both edges, `a - g` and `b - x`,
     /// is free. The cuts from both sides then pull `a` and `b` round the corner.
     fn split_points<M: Metric, C: Clock + ?Sized, const K: usize>(
         &self,
@@ -170,14 +177,14 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         })?;
         let (a, b) = at(lo);
         let gain = 2.0 * lo - a.dist(b);
-        (gain > 0.1 * env.map.grid().cell_size()
+        (gain > CUT_GAIN * env.map.grid().cell_size()
             && env.free(a, pg, meter)
             && env.free(b, px, meter))
         .then_some((a, b))
     }
 
     /// The farthest point `q` of the free segment `p - end` that `eye` sees, when the way
-    /// `eye - q` is shorter than `eye - p - q` by a tenth of a cell and `q - end` is free
+    /// `eye - q` is shorter than `eye - p - q` by [`CUT_GAIN`] of a cell and `q - end` is free
     /// ([`TreeStore::cut_corner`]). A corner already cut (`eye` sees nothing of the segment
     /// past `p`) costs one test.
     fn cut_point<M: Metric, C: Clock + ?Sized, const K: usize>(
@@ -191,6 +198,6 @@ impl<const N: usize, const B: usize> TreeStore<N, B> {
         let lo = farthest_seen(env, meter, 1.0, |t| env.free(eye, p.lerp(end, t), meter))?;
         let q = p.lerp(end, lo);
         let gain = eye.dist(p) + p.dist(q) - eye.dist(q);
-        (gain > 0.1 * env.map.grid().cell_size() && env.free(q, end, meter)).then_some(q)
+        (gain > CUT_GAIN * env.map.grid().cell_size() && env.free(q, end, meter)).then_some(q)
     }
 }
