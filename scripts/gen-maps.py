@@ -16,6 +16,8 @@ and a scenario file (nothing is committed):
 - rooms512: 512 x 512 cells at 0.25 m (128 m), rooms of 16 x 16 cells behind 1-cell walls, 1 m
   doors (4 cells) on a spanning tree of the rooms and on a third of the other walls (the
   MovingAI room maps);
+- office4: the reference office (`../shared/maps/office.png`, when it is there) drawn at four
+  times its cells, 0.25 m (800 x 800), its start and six goals (issue 42's "finer cells");
 - house384, house500: small buildings drawn like SLAM maps at 0.05 m (as rooms4096 below,
   19.2 and 25 m a side), the size of the small SLAM maps of issue 42;
 - with --big (issue 42's "any map up to 4096 x 4096 cells"): maze2047 and maze4095, mazes of
@@ -48,6 +50,46 @@ def png(path, rows):
         + chunk(b"IDAT", zlib.compress(raw, 9))
         + chunk(b"IEND", b"")
     )
+
+
+def read_png(path):
+    """Rows of 0/1 (occupied) from an 8-bit PNG, by the reference's rule: a pixel is occupied
+    when its grey level is below the image's mean."""
+    data = path.read_bytes()
+    pos, idat = 8, b""
+    while pos < len(data):
+        n, tag = struct.unpack(">I4s", data[pos : pos + 8])
+        body = data[pos + 8 : pos + 8 + n]
+        if tag == b"IHDR":
+            w, h, depth, kind = struct.unpack(">IIBB", body[:10])
+        elif tag == b"IDAT":
+            idat += body
+        pos += 12 + n
+    if depth != 8 or kind not in (0, 2, 4, 6):
+        sys.exit(f"{path}: an 8-bit grey or RGB(A) PNG is needed")
+    bpp = {0: 1, 2: 3, 4: 2, 6: 4}[kind]
+    raw, stride, prev, rows = zlib.decompress(idat), w * bpp, bytearray(w * bpp), []
+    for y in range(h):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1 : (y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - bpp] if i >= bpp else 0
+            b, c = prev[i], prev[i - bpp] if i >= bpp else 0
+            if f == 1:
+                line[i] = (line[i] + a) & 255
+            elif f == 2:
+                line[i] = (line[i] + b) & 255
+            elif f == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        prev = line
+        if kind in (2, 6):
+            rows.append([(299 * line[i] + 587 * line[i + 1] + 114 * line[i + 2]) / 1000 for i in range(0, stride, bpp)])
+        else:
+            rows.append([line[i] for i in range(0, stride, bpp)])
+    mean = sum(map(sum, rows)) / (w * h)
+    return [[1 if v < mean else 0 for v in r] for r in rows]
 
 
 def maze(n, seed):
@@ -241,6 +283,14 @@ def main():
     m = [[round((x + 0.5) * 0.25, 3), round((y + 0.5) * 0.25, 3)]
          for x, y in [(3, 3), (507, 507), (3, 507), (507, 3)]]
     scenarios.append(("rooms512", m[0], m[1:], 0.25))
+    office = pathlib.Path(__file__).resolve().parent.parent.parent / "shared/maps/office.png"
+    if office.exists():
+        g = [[v for v in r for _ in range(4)] for r in read_png(office) for _ in range(4)]
+        png(out / "office4.png", g)
+        goals = [[125.6, 141.6], [162.6, 13.4], [170.8, 128.0], [60.0, 185.8], [23.8, 48.6], [185.0, 178.2]]
+        scenarios.append(("office4", [79.0, 65.0], goals, 0.25))
+    else:
+        print(f"{office} is not there: no office4")
     buildings = [("house384", 384, 17), ("house500", 500, 19)]
     if big:
         buildings.append(("rooms4096", 4096, 13))
