@@ -485,3 +485,57 @@ fn regression_a_start_outside_the_largest_component_reaches_its_goal() {
     assert!(runs[0].result.reached, "{:?}", runs[0].result);
     assert_eq!(runs[0].result.collisions, 0);
 }
+
+/// Found by the bench against the baselines (issue 42): on a maze of 1-cell corridors the
+/// roadmap had no node (every wall's end was taken for a bump on the wall across the corridor,
+/// two cells away), and once it had them, it fell into a thousand pieces (tangency tested on
+/// the nodes, which stand 0.6 cells off their corners and tilt a segment along a corridor a
+/// cell wide) and the start attached to nothing. Now the roadmap is one piece and every leg
+/// joins over it in the first call, where neither our trees nor OMPL's RRT-Connect had a path
+/// in 10 s on a 129-cell maze.
+#[test]
+fn regression_a_maze_of_one_cell_corridors_joins_over_its_roadmap() {
+    use bi_am_rrt::clock::FakeClock;
+    let prep = host_sim::sim::Prepared::new(maze(20, 7)).without_optimum();
+    let baked = prep.roadmap().unwrap();
+    let rm = bi_am_rrt::roadmap::Roadmap::from_bytes(&baked.bytes).unwrap();
+    // One piece: every node reached from node 0.
+    let mut seen = vec![false; rm.len()];
+    let mut stack = vec![0usize];
+    seen[0] = true;
+    while let Some(v) = stack.pop() {
+        for w in rm.neighbours(v) {
+            if !seen[w] {
+                seen[w] = true;
+                stack.push(w);
+            }
+        }
+    }
+    assert!(rm.len() > 100, "{} nodes", rm.len());
+    assert!(seen.iter().all(|&s| s), "the roadmap is in pieces");
+    let mut from = prep.scenario.start;
+    for (k, &goal) in prep.scenario.goals.iter().enumerate() {
+        let tuned = prep.fit(host_sim::sim::planners::parse_planners("tuned").unwrap()[0]);
+        host_sim::sim::with_planner_at::<8192, _>(&prep, tuned, 1, from, |p| {
+            p.set_goal(goal).unwrap();
+            p.set_t_exp(std::time::Duration::from_millis(5)).unwrap();
+            let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+            let progress = p.grow(&clock);
+            assert!(progress.goal_in_tree && p.stats().roadmap, "to {goal:?}");
+            let mut path = vec![Point::ZERO; 8192];
+            let info = p.path(&mut path).unwrap();
+            // Corner to corner across the maze (leg 2 is two rooms long).
+            assert!(
+                info.to_goal && (k > 0 || info.len > 20),
+                "{} nodes",
+                info.len
+            );
+            for w in path[..info.len].windows(2) {
+                assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
+            }
+            Ok(())
+        })
+        .unwrap();
+        from = goal;
+    }
+}

@@ -51,6 +51,9 @@ pub const VERSION: u16 = 1;
 pub const HEADER_BYTES: usize = 28;
 /// A node's corner byte when the node has no corner (any direction is tangent).
 pub const NO_CORNER: u8 = 4;
+/// How far, in cells, a node with a corner stands from it, along the corner's diagonal away
+/// from its occupied cell (part of the format: [`Roadmap::tangent`] finds the corner so).
+pub const NODE_OFFSET: f32 = 0.6;
 /// Most roadmap nodes (ids are `u16`).
 pub const MAX_NODES: usize = u16::MAX as usize - 1;
 
@@ -239,9 +242,12 @@ impl<'a> Roadmap<'a> {
         (a..b).filter_map(|k| self.far(k))
     }
 
-    /// Whether the segment from `from` to node `i` passes its corner tangentially: its line
-    /// does not cut into the corner's occupied cell (within 45 degrees of the diagonal into
-    /// the cell, either way, it would). A shortest path arrives at a corner only so.
+    /// Whether the segment from `from` to node `i`'s corner passes the corner tangentially:
+    /// its line does not cut into the corner's occupied cell (within 45 degrees of the
+    /// diagonal into the cell, either way, it would). A shortest path arrives at a corner only
+    /// so. The corner is [`NODE_OFFSET`] cells from the node along its diagonal; tested from
+    /// the node itself, a segment along a corridor a cell wide would tilt by up to a third of
+    /// the cell and fail.
     pub fn tangent(&self, i: usize, from: Point) -> bool {
         let c = self.corner(i);
         if c >= NO_CORNER {
@@ -250,9 +256,10 @@ impl<'a> Roadmap<'a> {
         let Some(n) = self.node(i) else {
             return false;
         };
-        let (ex, ey) = (n.x - from.x, n.y - from.y);
         let dx = if c & 1 != 0 { 1.0 } else { -1.0 };
         let dy = if c & 2 != 0 { 1.0 } else { -1.0 };
+        let off = NODE_OFFSET * self.grid.2;
+        let (ex, ey) = (n.x + off * dx - from.x, n.y + off * dy - from.y);
         let along = libm::fabsf(ex * dx + ey * dy);
         along * along <= (ex * ex + ey * ey) * 1.0001
     }

@@ -23,8 +23,9 @@ use bi_am_rrt::geometry::Point;
 use bi_am_rrt::map::OccupancyGrid;
 use bi_am_rrt::roadmap::{self, NO_CORNER};
 
-/// Nodes stand this far (in cells) off their corner, along the corner's diagonal.
-pub const OFFSET_CELLS: f32 = 0.6;
+/// Nodes stand this far (in cells) off their corner, along the corner's diagonal (the
+/// format's).
+pub const OFFSET_CELLS: f32 = roadmap::NODE_OFFSET;
 /// The scale, in metres, at which a corner must be a vertex of the obstacle's outline (at
 /// least two cells).
 pub const HULL_M: f32 = 0.3;
@@ -32,7 +33,7 @@ pub const HULL_M: f32 = 0.3;
 pub const MAX_ANGLE_DEG: f32 = 165.0;
 /// Most nodes a bake keeps: the edges are found by testing every pair, and a planner's
 /// reverse arena must hold the search's scratch (`N - 1` nodes).
-pub const MAX_NODES: usize = 4_000;
+pub const MAX_NODES: usize = 8_000;
 
 /// The greedy spanner's stretch: an edge is dropped when the edges kept already join its ends
 /// within this factor of its length. On a map of many small obstacles (nav2's depot: 40 edges
@@ -125,10 +126,14 @@ pub fn bake(
         c < 0 || r < 0 || c >= cols || r >= rows || space.is_occupied(c as u16, r as u16)
     };
     let reach = ((HULL_M / cell).round() as i32).max(2);
+    let join = ((HULL_M / cell).round() as i32).max(1);
     let widest = MAX_ANGLE_DEG.to_radians();
     let mut nodes: Vec<Point> = Vec::new();
     let mut corners: Vec<u8> = Vec::new();
     let mut dirs: Vec<(f32, f32)> = Vec::new();
+    let mut verts: Vec<(f32, f32)> = Vec::new();
+    let mut window: Vec<bool> = Vec::new();
+    let mut stack: Vec<(i32, i32)> = Vec::new();
     for vy in 1..rows {
         for vx in 1..cols {
             let q = [
@@ -147,18 +152,44 @@ pub fn bake(
                 Some(2) => (-1.0, 1.0),
                 _ => (1.0, 1.0),
             };
-            // A vertex of the outline at the scale `reach`.
+            // A vertex of the outline at the scale `reach`: the occupied cells of the window
+            // joined to the corner's own cell within it, across gaps narrower than `HULL_M`
+            // (`join` cells: on a fine map pixel noise beside a wall is part of the wall; on
+            // a coarse one another wall across a corridor is another obstacle, as in a maze
+            // of 1-cell corridors, where every wall's end is a corner a path bends round).
+            let side = 2 * reach as usize;
+            let inside = |c: i32, r: i32| {
+                let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
+                (-reach..reach).contains(&c)
+                    && (-reach..reach).contains(&r)
+                    && x * x + y * y <= (reach * reach) as f32
+                    && occ(vx + c, vy + r)
+            };
+            let at = |c: i32, r: i32| ((r + reach) as usize) * side + (c + reach) as usize;
+            window.clear();
+            window.resize(side * side, false);
+            let own = (
+                if d.0 > 0.0 { 0 } else { -1 },
+                if d.1 > 0.0 { 0 } else { -1 },
+            );
+            stack.clear();
+            stack.push(own);
+            window[at(own.0, own.1)] = true;
             let (mut lo, mut hi, mut wraps) = (0.0f32, 0.0f32, false);
-            for r in -reach..reach {
-                for c in -reach..reach {
-                    let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
-                    if x * x + y * y > (reach * reach) as f32 || !occ(vx + c, vy + r) {
-                        continue;
+            while let Some((c, r)) = stack.pop() {
+                let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
+                let a = (d.0 * y - d.1 * x).atan2(d.0 * x + d.1 * y);
+                wraps |= a.abs() > 0.95 * std::f32::consts::PI;
+                lo = lo.min(a);
+                hi = hi.max(a);
+                for dr in -join..=join {
+                    for dc in -join..=join {
+                        let (nc, nr) = (c + dc, r + dr);
+                        if inside(nc, nr) && !window[at(nc, nr)] {
+                            window[at(nc, nr)] = true;
+                            stack.push((nc, nr));
+                        }
                     }
-                    let a = (d.0 * y - d.1 * x).atan2(d.0 * x + d.1 * y);
-                    wraps |= a.abs() > 0.95 * std::f32::consts::PI;
-                    lo = lo.min(a);
-                    hi = hi.max(a);
                 }
             }
             if wraps || hi - lo >= widest {
@@ -180,6 +211,7 @@ pub fn bake(
             nodes.push(p);
             corners.push(u8::from(d.0 > 0.0) | (u8::from(d.1 > 0.0) << 1));
             dirs.push(d);
+            verts.push((vx as f32, vy as f32));
         }
     }
     let tangent = |e: (f32, f32), d: (f32, f32)| {
@@ -197,10 +229,14 @@ pub fn bake(
     let nodes: Vec<Point> = order.iter().map(|&i| nodes[i]).collect();
     let corners: Vec<u8> = order.iter().map(|&i| corners[i]).collect();
     let dirs: Vec<(f32, f32)> = order.iter().map(|&i| dirs[i]).collect();
+    let verts: Vec<(f32, f32)> = order.iter().map(|&i| verts[i]).collect();
     let mut adj: Vec<Vec<u16>> = vec![Vec::new(); nodes.len()];
     for i in 0..nodes.len() {
         for j in i + 1..nodes.len() {
-            let e = (nodes[j].x - nodes[i].x, nodes[j].y - nodes[i].y);
+            // Tangent at both corners: tested on the corners themselves (grid vertices), not
+            // on the nodes beside them, whose offset tilts a segment along a corridor a cell
+            // wide by up to a third of it.
+            let e = (verts[j].0 - verts[i].0, verts[j].1 - verts[i].1);
             if tangent(e, dirs[i]) && tangent(e, dirs[j]) && space.segment_free(nodes[i], nodes[j])
             {
                 adj[i].push(j as u16);
