@@ -9,8 +9,8 @@ use clap::Args;
 /// The options of `host-sim report` (its description is the command's, in `main.rs`).
 #[derive(Args)]
 pub struct Cmd {
-    /// The results folder (experiment.json and runs.csv, or a `moving` folder:
-    /// moving.json and runs.csv).
+    /// The results folder (experiment.json and runs.csv, a `moving` folder: moving.json and
+    /// runs.csv, or a `bench` folder: bench.json and bench.csv).
     #[arg(long)]
     results: PathBuf,
     /// The Markdown file to write; the charts go to a folder beside it of the same name
@@ -43,6 +43,12 @@ pub fn main(cmd: Cmd) -> Result<()> {
         }
         None => None,
     };
+    if results.join(host_sim::study::bench::SETTINGS_FILE).exists() {
+        let md = host_sim::study::bench::report(&results, &command, notes.as_deref())?;
+        std::fs::write(&out, md).with_context(|| format!("writing {}", out.display()))?;
+        println!("wrote {} (a bench's per-leg tables)", out.display());
+        return Ok(());
+    }
     if results
         .join(host_sim::study::moving::SETTINGS_FILE)
         .exists()

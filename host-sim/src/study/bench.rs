@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
 use bi_am_rrt::Named;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::metric::optimum::leg_starts;
 use crate::results::stats::median;
@@ -180,6 +180,23 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut rows = Vec::new();
     let mut arenas = Arenas::default();
+    let settings = BenchSettings {
+        command: std::iter::once("host-sim".to_string())
+            .chain(std::env::args().skip(1))
+            .collect::<Vec<_>>()
+            .join(" "),
+        seeds: args.seeds,
+        budgets: args.budgets.clone(),
+        clock: format!("{:?}", args.clock).to_lowercase(),
+        cold: args.cold,
+        until_first: args.until_first,
+        grid: args.grid,
+        ompl: args.ompl.is_some(),
+    };
+    std::fs::write(
+        args.out.join(SETTINGS_FILE),
+        serde_json::to_string_pretty(&settings)?,
+    )?;
     let mut csv = std::fs::File::create(args.out.join("bench.csv"))?;
     writeln!(csv, "{}", header(&args.budgets))?;
     for s in &args.scenarios {
@@ -308,6 +325,155 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
         print!("\n{ratios}");
     }
     Ok(rows)
+}
+
+/// The settings file a bench writes beside `bench.csv`: with both, `host-sim report` makes
+/// the bench's page ([`report`]).
+pub const SETTINGS_FILE: &str = "bench.json";
+
+/// What a bench ran with (`bench.json`).
+#[derive(Serialize, Deserialize)]
+pub struct BenchSettings {
+    /// The command line.
+    pub command: String,
+    /// Seeds per leg and planner.
+    pub seeds: u64,
+    /// The CPU budgets at which costs were read, in seconds.
+    pub budgets: Vec<f64>,
+    /// The planners' clock (`cpu`, `wall` or `virtual`).
+    pub clock: String,
+    /// Caches flushed before every measured query (the default) or not (`--warm`).
+    pub cold: bool,
+    /// Each of our runs ended at its first solution (`--until-first`).
+    pub until_first: bool,
+    /// The grid planners ran.
+    pub grid: bool,
+    /// OMPL's planners ran.
+    pub ompl: bool,
+}
+
+/// Reads a bench's rows back from its `bench.csv` (the columns [`run`] writes, one cost
+/// column per budget).
+pub fn read_rows(path: &std::path::Path, budgets: &[f64]) -> Result<Vec<BenchRow>> {
+    let mut r =
+        csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
+    let head = r.headers()?.clone();
+    if head.iter().collect::<Vec<_>>().join(",") != header(budgets) {
+        return Err(anyhow!(
+            "{}: its columns are not those of a bench with budgets {budgets:?}",
+            path.display()
+        ));
+    }
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap_or(usize::MAX);
+    let mut rows = Vec::new();
+    for rec in r.records() {
+        let rec = rec?;
+        let get = |name: &str| rec.get(col(name)).unwrap_or("");
+        let num = |name: &str| -> Result<Option<f64>> {
+            let v = get(name);
+            if v.is_empty() {
+                Ok(None)
+            } else {
+                v.parse()
+                    .map(Some)
+                    .with_context(|| format!("{}: column {name}: {v:?}", path.display()))
+            }
+        };
+        let need =
+            |name: &str| num(name)?.ok_or_else(|| anyhow!("{}: {name} empty", path.display()));
+        rows.push(BenchRow {
+            map: get("map").to_string(),
+            leg: need("leg")? as usize,
+            planner: get("planner").to_string(),
+            seed: need("seed")? as u64,
+            optimal_m: need("optimal_m")?,
+            first_us: num("first_us")?,
+            first_ratio: num("first_ratio")?,
+            first_nodes: num("first_nodes")?.map(|v| v as usize),
+            cost_ratio: budgets
+                .iter()
+                .map(|b| num(&format!("cost_ratio_{b}s")))
+                .collect::<Result<_>>()?,
+            nodes: need("nodes")? as usize,
+            equal_ratio: num("equal_time_ratio")?,
+            equal_us: num("equal_time_us")?,
+            expansions_per_s: need("expansions_per_s")?,
+            reads_per_expansion: need("reads_per_expansion")?,
+            full: get("full") == "true",
+        });
+    }
+    Ok(rows)
+}
+
+/// A bench's page from its folder (`bench.json` and `bench.csv`): the settings, the summary,
+/// and the per-leg ratios against the grid planners and OMPL's that the bench printed.
+/// `command` is the line that made the page; `notes`, Markdown to add after the settings.
+pub fn report(dir: &std::path::Path, command: &str, notes: Option<&str>) -> Result<String> {
+    let path = dir.join(SETTINGS_FILE);
+    let settings: BenchSettings = serde_json::from_str(
+        &std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?,
+    )
+    .with_context(|| format!("reading {}", path.display()))?;
+    let rows = read_rows(&dir.join("bench.csv"), &settings.budgets)?;
+    let mut maps: Vec<&str> = Vec::new();
+    for r in &rows {
+        if !maps.contains(&r.map.as_str()) {
+            maps.push(&r.map);
+        }
+    }
+    let mut md = format!(
+        "# Against the baselines: {}\n\n<!-- Made by `{command}` from bench.csv and bench.json: \
+         regenerate it, do not edit. -->\n\nThe bench (`{}`): {} seeds a leg, {} clock, {}{}; \
+         costs read at {} s.\n\n",
+        maps.join(", "),
+        settings.command,
+        settings.seeds,
+        settings.clock,
+        if settings.cold {
+            "cold queries (caches flushed before each)"
+        } else {
+            "warm queries"
+        },
+        if settings.until_first {
+            ", each of ours ended at its first solution"
+        } else {
+            ""
+        },
+        settings
+            .budgets
+            .iter()
+            .map(|b| b.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if let Some(n) = notes {
+        md.push_str(n.trim_end());
+        md.push_str("\n\n");
+    }
+    md.push_str("## Summary\n\n");
+    md.push_str(&summary_markdown(
+        &summarise(&rows, &settings.budgets),
+        &settings.budgets,
+    ));
+    let budgets: &[f64] = if settings.until_first {
+        &[]
+    } else {
+        &settings.budgets
+    };
+    if settings.grid {
+        md.push_str("\n## Against the grid planners\n\n");
+        md.push_str(&grid_markdown(&rows, budgets));
+    }
+    if settings.ompl {
+        md.push_str("\n## Against OMPL\n\n");
+        md.push_str(&ratios_markdown(
+            &rows,
+            budgets,
+            settings.cold,
+            settings.until_first,
+        ));
+    }
+    Ok(md)
 }
 
 /// The planner name of the OMPL rows.
@@ -703,7 +869,7 @@ fn csv_line(r: &BenchRow) -> String {
         r.seed,
         r.optimal_m,
         opt(r.first_us.map(|v| format!("{v:.1}"))),
-        opt(r.first_ratio.map(|v| format!("{v:.4}"))),
+        opt(r.first_ratio.map(|v| format!("{v:.6}"))),
         opt(r.first_nodes),
         r.nodes,
         r.expansions_per_s,
@@ -712,11 +878,11 @@ fn csv_line(r: &BenchRow) -> String {
     );
     for c in &r.cost_ratio {
         s.push(',');
-        s.push_str(&opt(c.map(|v| format!("{v:.4}"))));
+        s.push_str(&opt(c.map(|v| format!("{v:.6}"))));
     }
     s.push_str(&format!(
         ",{},{}",
-        opt(r.equal_ratio.map(|v| format!("{v:.4}"))),
+        opt(r.equal_ratio.map(|v| format!("{v:.6}"))),
         opt(r.equal_us.map(|v| format!("{v:.1}")))
     ));
     s
