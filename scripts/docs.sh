@@ -6,7 +6,8 @@
 # Always: the configuration and command-line references (`host-sim params`, `host-sim
 # cli-reference`) and each results page
 # (`docs/results/STUDY/README.md` and its charts, by `host-sim report` or `compare` from
-# `data/` and the hand-written `notes.md`). These take seconds; with --check the pages are
+# `data/` and the hand-written `notes.md`; `docs/results/baselines/*/README.md` from each
+# bench's `data/`). These take seconds; with --check the pages are
 # made in a temporary folder and compared instead of written (the tests
 # `docs_configuration_is_the_parameter_table` and `docs_results_is_the_report_of_its_data`
 # check the same in `cargo test`).
@@ -58,6 +59,17 @@ for s in full-speed pace sigma fig7 fig7-full fig7-reference fig10 fig10-hold; d
     sed -i "s|$out/results/$s|$d|g" "$out/results/$s/README.md"
   fi
 done
+# The benches against the baselines: each folder's page from its bench.json and bench.csv.
+for d in docs/results/baselines/*/; do
+  d=${d%/}
+  mkdir -p "$out/results/baselines/$(basename "$d")"
+  "$sim" report --results "$d/data" --out "$out/results/baselines/$(basename "$d")/README.md" \
+    --notes "$d/notes.md" >/dev/null
+  if [ "$check" = 1 ]; then
+    sed -i "s|$out/results/baselines|docs/results/baselines|g" \
+      "$out/results/baselines/$(basename "$d")/README.md"
+  fi
+done
 p=docs/results/printed
 variants=""
 for v in alg4-take alg6-take alg6-cost alg6-clear alg4-free alg5-gate alg6-clear-outside all; do
@@ -74,7 +86,7 @@ if [ "$check" = 1 ]; then
   sed -i "s|$out/results/pace|docs/results/pace|g" "$out/results/pace/wait-from-set.md"
   stale=0
   for f in reference/configuration.md reference/cli.md results/{full-speed,pace,sigma,fig7,fig7-full,fig7-reference,fig10,fig10-hold,printed}/README.md \
-    results/pace/wait-from-set.md; do
+    results/pace/wait-from-set.md $(cd docs && ls results/baselines/*/README.md); do
     if ! diff -q "docs/$f" "$out/$f" >/dev/null; then
       echo "docs/$f is stale: run scripts/docs.sh"
       stale=1

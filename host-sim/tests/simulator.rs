@@ -1409,6 +1409,35 @@ fn docs_results_is_the_report_of_its_data() {
             "{rel}/README.md is stale: regenerate it with {command}"
         );
     }
+    // The benches against the baselines (docs/results/baselines/*): each page is the report
+    // of its bench.json and bench.csv.
+    let mut benches = 0;
+    for entry in std::fs::read_dir(results.join("baselines")).unwrap() {
+        let here = entry.unwrap().path();
+        if !here.join("data").join("bench.json").exists() {
+            continue;
+        }
+        let name = here.file_name().unwrap().to_string_lossy().to_string();
+        let rel = format!("docs/results/baselines/{name}");
+        let notes = std::fs::read_to_string(here.join("notes.md")).ok();
+        let command = format!(
+            "host-sim report --results {rel}/data --out {rel}/README.md{}",
+            if notes.is_some() {
+                format!(" --notes {rel}/notes.md")
+            } else {
+                String::new()
+            }
+        );
+        let made =
+            host_sim::study::bench::report(&here.join("data"), &command, notes.as_deref()).unwrap();
+        let committed = std::fs::read_to_string(here.join("README.md")).unwrap();
+        assert!(
+            made == committed,
+            "{rel}/README.md is stale: regenerate it with {command}"
+        );
+        benches += 1;
+    }
+    assert!(benches >= 4, "{benches} bench pages");
     // One reading at a time (docs/results/printed), made by `compare`.
     let here = results.join("printed");
     let data = here.join("data");

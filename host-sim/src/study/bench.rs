@@ -423,8 +423,8 @@ pub fn report(dir: &std::path::Path, command: &str, notes: Option<&str>) -> Resu
     }
     let mut md = format!(
         "# Against the baselines: {}\n\n<!-- Made by `{command}` from bench.csv and bench.json: \
-         regenerate it, do not edit. -->\n\nThe bench (`{}`): {} seeds a leg, {} clock, {}{}; \
-         costs read at {} s.\n\n",
+         regenerate it, do not edit. -->\n\nThe bench (`{}`): {} seeds a leg, {} clock, {}{} \
+         {} s.\n\n",
         maps.join(", "),
         settings.command,
         settings.seeds,
@@ -435,9 +435,9 @@ pub fn report(dir: &std::path::Path, command: &str, notes: Option<&str>) -> Resu
             "warm queries"
         },
         if settings.until_first {
-            ", each of ours ended at its first solution"
+            ", each of ours ended at its first solution, within"
         } else {
-            ""
+            "; costs read at"
         },
         settings
             .budgets
