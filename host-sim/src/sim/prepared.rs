@@ -237,6 +237,33 @@ impl Prepared {
         if legs.is_empty() {
             return;
         }
+        // With the scenario's roadmap the first path does not come from the trees.
+        if let Some(rm) = cfg
+            .cfg
+            .tactics
+            .roadmap
+            .then(|| self.roadmap().ok())
+            .flatten()
+        {
+            for (k, p) in legs {
+                if budget(k).is_none() {
+                    continue;
+                }
+                eprintln!(
+                    "note: {} on {}, leg {}: {:.0} m of its {:.0} m shortest grid path run \
+                     through passages narrower than e_max / 4; its first path comes from the \
+                     scenario's roadmap ({} nodes), which sampling trees alone (`@roadmap=false`, \
+                     and OMPL's) would be slow to find there",
+                    cfg.name(),
+                    self.scenario.name,
+                    k + 1,
+                    p.narrow_m,
+                    p.length_m,
+                    rm.nodes
+                );
+            }
+            return;
+        }
         // The exact shortest path of each leg (once per scenario, whichever planners ask):
         // how many straight pieces a tree path needs about.
         let pieces = self.pieces.get_or_init(|| {
