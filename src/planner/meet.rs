@@ -107,7 +107,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let baked_free = self.map.radius() == 0.0 && self.map.marked_cells() == 0;
         let obstacles = units(self.map.obstacles().len());
         for k in 1..len {
-            let (a, b) = (node(k - 1), node(k));
+            let (a, b) = (node(k.saturating_sub(1)), node(k));
             let free = if baked_free {
                 meter.charge(obstacles.saturating_add(2));
                 !self.map.obstacles().blocks_segment(a, b)

@@ -263,7 +263,7 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
     const COLS: u16 = 3 * WALLS + 3;
     const ROWS: u16 = 20;
     const BYTES: usize = OccupancyGrid::bytes_needed(COLS, ROWS);
-    let top = |i: u16| i % 2 == 0;
+    let top = |i: u16| i.is_multiple_of(2);
     let mut bits = [0u8; BYTES];
     pack_grid(&mut bits, COLS, ROWS, |c, r| {
         c >= 2 && (c - 2) % 3 == 0 && {
@@ -286,8 +286,8 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
     let mut first = [0u32; 2 * WALLS as usize + 1];
     let mut far = [0u16; 2 * (2 * WALLS as usize - 1)];
     let mut e = 0usize;
-    for i in 0..n {
-        first[i] = e as u32;
+    for (i, f) in first.iter_mut().enumerate().take(n) {
+        *f = e as u32;
         if i > 0 {
             far[e] = (i - 1) as u16;
             e += 1;
