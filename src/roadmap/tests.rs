@@ -315,20 +315,23 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
     cfg.bidirectional = false;
     cfg.budget.max_expansions = 1;
     let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
-    let rng = || rand_xorshift::XorShiftRng::seed_from_u64(3);
+    // A planner of `N` slots a tree on the comb, the roadmap attached and the goal set.
+    fn comb<'s, 'm, const N: usize>(
+        storage: &'s mut Storage<N, 16>,
+        grid: OccupancyGrid<'m>,
+        rm: Roadmap<'m>,
+        cfg: Config,
+        (start, goal): (Point, Point),
+    ) -> Planner<'s, 'm, Euclidean, rand_xorshift::XorShiftRng, N, 16, 2> {
+        let rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
+        let mut p = Planner::new(storage, Map::<2>::new(grid), Euclidean, rng, cfg, start).unwrap();
+        p.set_roadmap(Some(rm)).unwrap();
+        p.set_goal(goal).unwrap();
+        p
+    }
     // 512 slots: the 140-node branch joins in the first call, its cost the roadmap path's.
     let mut storage = Storage::<512, 16>::new();
-    let mut p = Planner::new(
-        &mut storage,
-        Map::<2>::new(grid),
-        Euclidean,
-        rng(),
-        cfg,
-        start,
-    )
-    .unwrap();
-    p.set_roadmap(Some(rm)).unwrap();
-    p.set_goal(goal).unwrap();
+    let mut p = comb(&mut storage, grid, rm, cfg, (start, goal));
     let progress = p.plan(&clock, start).unwrap();
     assert!(progress.goal_in_tree && p.stats().roadmap);
     let first_cost = p.stats().first_cost.unwrap();
@@ -341,17 +344,7 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
     }
     // 256 slots: 1 + 2 x 140 > 256, the path is dropped; the arena is left empty.
     let mut storage = Storage::<256, 16>::new();
-    let mut p = Planner::new(
-        &mut storage,
-        Map::<2>::new(grid),
-        Euclidean,
-        rng(),
-        cfg,
-        start,
-    )
-    .unwrap();
-    p.set_roadmap(Some(rm)).unwrap();
-    p.set_goal(goal).unwrap();
+    let mut p = comb(&mut storage, grid, rm, cfg, (start, goal));
     p.plan(&clock, start).unwrap();
     assert!(!p.stats().roadmap);
     assert_eq!(p.reverse_tree().len(), 0);
