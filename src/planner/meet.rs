@@ -94,12 +94,15 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         if base.saturating_add(len.saturating_mul(2)) > N {
             return false;
         }
-        let rev = &self.rev.tree;
-        let node = |k: usize| {
-            rev.spare_from_end(k)
-                .and_then(|i| rm.node(usize::from(i)))
-                .unwrap_or(goal.pos)
-        };
+        // The path's `k`-th node from the goal's end (the search left its id there).
+        fn node_at<const N: usize>(
+            tree: &crate::tree::Tree<N>,
+            rm: &crate::roadmap::Roadmap<'_>,
+            k: usize,
+        ) -> Option<Point> {
+            tree.spare_from_end(k).and_then(|i| rm.node(usize::from(i)))
+        }
+        let node = |k: usize| node_at(&self.rev.tree, &rm, k).unwrap_or(goal.pos);
         // The attaching segments were tested; the roadmap's own edges are tested here, against
         // everything the map holds now. They are free of the grid it was baked for (`fits`
         // checked its cells): for a point robot on a map whose live cells mark nothing, only
@@ -128,13 +131,8 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             let mut prev = goal.pos;
             let mut built = true;
             for k in 0..len {
-                // Read before the insertion, which may take a slot below it.
-                let Some(p) = self
-                    .rev
-                    .tree
-                    .spare_from_end(k)
-                    .and_then(|i| rm.node(usize::from(i)))
-                else {
+                // (The branch's slots stay below the path's: checked above.)
+                let Some(p) = node_at(&self.rev.tree, &rm, k) else {
                     built = false;
                     break;
                 };

@@ -412,7 +412,7 @@ pub struct Exported {
 
 /// Writes a scenario for a firmware into `dir`: `NAME.grid` (the bit-packed grid of
 /// `bi_am_rrt::map`), `NAME.table` (its diffusion table, `table` options), `NAME.roadmap` (its
-/// roadmap, [`crate::metric::roadmap::bake`]; empty when it has none) and `NAME.rs`, Rust
+/// roadmap, [`crate::metric::roadmap::of_scenario`]; empty when it has none) and `NAME.rs`, Rust
 /// source that a firmware `include!`s: grid, table and roadmap as `static` byte arrays (flash), the
 /// grid's shape, the start, the goals and `sigma`, and the firmware's mission ([`Mission`]).
 pub fn export_flash(
@@ -440,15 +440,7 @@ pub fn export_flash(
     write_file(&dir.join(format!("{name}.table")), &baked.table)?;
     // The roadmap of the first solution (core feature `roadmap`): baked on the grid the
     // planner tests paths on, for the planner's map, as the simulator bakes it.
-    let space_grid = sc
-        .space
-        .as_ref()
-        .map_or_else(|| sc.map.grid(), |s| s.grid());
-    let (roadmap, no_roadmap) = match crate::metric::roadmap::bake(
-        &space_grid,
-        &sc.planner_map::<1>()?.metric_grid(),
-        crate::metric::roadmap::MAX_NODES,
-    ) {
+    let (roadmap, no_roadmap) = match crate::metric::roadmap::of_scenario(sc) {
         Ok(r) => (r.bytes, None),
         Err(e) => (Vec::new(), Some(format!("{e:#}"))),
     };
@@ -723,7 +715,7 @@ pub fn export_command(
     } else {
         println!("  flash data {data} of {flash_data} bytes: fits the firmware example");
     }
-    // The roadmap's code in the firmware example (the core's `roadmap` feature): 5,996 bytes
+    // The roadmap's code in the firmware example (the core's `roadmap` feature): 6,048 bytes
     // of flash measured on the office export (docs/guides/firmware.md), rounded up.
     const ROADMAP_CODE_BYTES: usize = 6 * 1024;
     let with_roadmap = data + ex.roadmap_bytes + ROADMAP_CODE_BYTES;

@@ -111,6 +111,19 @@ pub struct Baked {
     pub edges: usize,
 }
 
+/// The roadmap of a scenario, as every planner of `host-sim` and the firmware export get it:
+/// baked from the grid the planner tests paths on (the scenario's, or the one inflated for the
+/// robot's body) for the planner's map, at most [`MAX_NODES`] nodes.
+pub fn of_scenario(sc: &crate::scenario::Scenario) -> Result<Baked> {
+    let map = sc.planner_map::<1>()?;
+    let space = sc
+        .space
+        .as_ref()
+        .map_or_else(|| sc.map.grid(), |s| s.grid());
+    bake(&space, &map.metric_grid(), MAX_NODES)
+        .map_err(|e| anyhow::anyhow!("scenario {}: {e:#}", sc.name))
+}
+
 /// Bakes the roadmap of `space` (the grid the planner tests paths on: the scenario's, or the
 /// grid inflated for the robot's body) for the planner's map `metric_grid` (its
 /// `Map::metric_grid`: the roadmap records its hash and size). Errors when more than

@@ -97,19 +97,7 @@ impl Prepared {
     pub fn roadmap(&self) -> Result<&crate::metric::roadmap::Baked> {
         self.roadmap
             .get_or_init(|| {
-                let sc = &self.scenario;
-                let map = sc.planner_map::<1>().map_err(|e| format!("{e:#}"))?;
-                let space = sc
-                    .space
-                    .as_ref()
-                    .map_or_else(|| sc.map.grid(), |s| s.grid());
-                let metric_grid = map.metric_grid();
-                crate::metric::roadmap::bake(
-                    &space,
-                    &metric_grid,
-                    crate::metric::roadmap::MAX_NODES,
-                )
-                .map_err(|e| format!("scenario {}: {e:#}", sc.name))
+                crate::metric::roadmap::of_scenario(&self.scenario).map_err(|e| format!("{e:#}"))
             })
             .as_ref()
             .map_err(|e| anyhow!("{e}"))
