@@ -295,25 +295,31 @@ impl<const N: usize> Tree<N> {
         rd(&self.flags, id.index(), 0) & m as u8 != 0
     }
 
-    /// Clears mark `m` from every node: O(len) byte writes.
-    /// The arena's slots after its nodes (`N - len` of each), as scratch for a search that
-    /// runs while the tree is (nearly) empty (module `roadmap`): positions, parents and both
-    /// child links. A node added later sets every field of its slot, so nothing written here is
-    /// ever read as a node.
+    /// The arena's last `n` slots of each of four arrays, as scratch for a search that may
+    /// run over several calls while the tree does not grow (module `roadmap`): positions,
+    /// parents and both child links; `None` when the tree's nodes reach into them. A node
+    /// added later sets every field of its slot, so nothing written here is ever read as a
+    /// node, and the slots stay as they were left while the tree has fewer than `N - n` nodes.
     #[cfg(feature = "roadmap")]
     #[allow(clippy::type_complexity)] // four arrays of the arena, named by the caller
-    pub(crate) fn spare(&mut self) -> (&mut [Point], &mut [u16], &mut [u16], &mut [u16]) {
-        let n = usize::from(self.len);
-        (
-            self.pos.get_mut(n..).unwrap_or_default(),
-            self.parent.get_mut(n..).unwrap_or_default(),
-            self.first_child.get_mut(n..).unwrap_or_default(),
-            self.next_sibling.get_mut(n..).unwrap_or_default(),
-        )
+    pub(crate) fn spare(
+        &mut self,
+        n: usize,
+    ) -> Option<(&mut [Point], &mut [u16], &mut [u16], &mut [u16])> {
+        let from = N.checked_sub(n)?;
+        if usize::from(self.len) > from {
+            return None;
+        }
+        Some((
+            self.pos.get_mut(from..)?,
+            self.parent.get_mut(from..)?,
+            self.first_child.get_mut(from..)?,
+            self.next_sibling.get_mut(from..)?,
+        ))
     }
 
     /// The `k`-th `u16` from the end of [`Tree::spare`]'s third slice (what a roadmap search
-    /// left there, `roadmap::find_path`): read from the arena's slot `N - 1 - k`, `None` once
+    /// left there, `roadmap::resume`): read from the arena's slot `N - 1 - k`, `None` once
     /// that slot holds a node.
     #[cfg(feature = "roadmap")]
     pub(crate) fn spare_from_end(&self, k: usize) -> Option<u16> {
@@ -321,6 +327,7 @@ impl<const N: usize> Tree<N> {
         (i >= usize::from(self.len)).then(|| rd(&self.first_child, i, NONE))
     }
 
+    /// Clears mark `m` from every node: O(len) byte writes.
     pub(crate) fn clear_marks(&mut self, m: Mark) {
         let n = self.len();
         for f in self.flags.iter_mut().take(n) {

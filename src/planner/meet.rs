@@ -46,22 +46,23 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// The `roadmap` tactic (module [`crate::roadmap`]): searches the attached roadmap from the
     /// root to the goal, tests every edge of the path found, makes it a branch of the reverse
     /// tree (one-tree planners borrow the reverse arena for it) and grafts it below the root.
-    /// Returns whether the goal joined. Only while the reverse arena has a free slot per
-    /// roadmap node: they are the search's scratch.
+    /// `Some(joined)` once the goal's search has ended, `None` when the call's time ran out
+    /// first: the search waits in [`crate::roadmap::Stage`] for the next call, its scratch in
+    /// the reverse arena's last free slots (one per roadmap node), and the trees do not grow
+    /// meanwhile.
     #[cfg(feature = "roadmap")]
     pub(super) fn roadmap_join<C: Clock + ?Sized>(
         &mut self,
         meter: &Meter<'_, C>,
         call: Deadline,
-    ) -> bool {
+    ) -> Option<bool> {
+        use crate::roadmap::{Poll, Scratch, Stage};
+        let stage = core::mem::take(&mut self.roadmap_stage);
         let (Some(rm), Some(goal)) = (self.roadmap, self.goal) else {
-            return false;
+            return Some(false);
         };
-        if !self.cfg.tactics.roadmap
-            || goal.node.is_some()
-            || N.saturating_sub(self.rev.tree.len()) < rm.len()
-        {
-            return false;
+        if matches!(stage, Stage::Idle) || !self.cfg.tactics.roadmap || goal.node.is_some() {
+            return Some(false);
         }
         let root = self.root_position();
         let env = Env {
@@ -71,28 +72,96 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             call,
         };
         let one_tree = self.rev_goal.is_none();
-        // The roadmap's path: its nodes from the goal's end to the root's (the ends left out),
-        // left by the search in the reverse arena's last slots; none when the goal is in
-        // sight: the straight segment is then the path (no search).
-        let mut len = 0usize;
-        if !env.free(root, goal.pos, meter) {
-            let (g, parent, heap, slot) = self.rev.tree.spare();
-            let mut scratch = crate::roadmap::Scratch {
-                g,
-                parent,
-                heap,
-                slot,
+        // A stage left by an earlier call: the path's ends are tested again when it is found.
+        let carried = matches!(stage, Stage::Open(_) | Stage::Found { .. });
+        let mut stage = stage;
+        // Open, run and end the search (each arm moves on or returns).
+        let (len, mut tested, resumed) = loop {
+            let scratch = self
+                .rev
+                .tree
+                .spare(rm.len())
+                .map(|(g, parent, heap, slot)| Scratch {
+                    g,
+                    parent,
+                    heap,
+                    slot,
+                });
+            stage = match stage {
+                Stage::Idle => return Some(false),
+                Stage::Due => {
+                    // The straight segment first: when free, it is the path (no search).
+                    if env.free(root, goal.pos, meter) {
+                        Stage::Found {
+                            len: 0,
+                            tested: 0,
+                            resumed: false,
+                        }
+                    } else {
+                        let next = Stage::Attach {
+                            tries: 0,
+                            ends: heapless::Vec::new(),
+                        };
+                        if meter.expired(&call) {
+                            self.roadmap_stage = next;
+                            return None;
+                        }
+                        next
+                    }
+                }
+                Stage::Attach { tries, ends } => {
+                    let Some(mut scratch) = scratch else {
+                        return Some(false);
+                    };
+                    let had = !ends.is_empty();
+                    let ends_at = (root, goal.pos);
+                    match crate::roadmap::open(&rm, &env, ends_at, ends, &mut scratch, meter) {
+                        Ok(search) => Stage::Open(search),
+                        Err((Poll::Pending, ends)) => {
+                            // A call that attached the goal made progress: the count restarts.
+                            let tries = if ends.is_empty() || had {
+                                tries.saturating_add(1)
+                            } else {
+                                0
+                            };
+                            if tries >= crate::roadmap::OPEN_TRIES {
+                                return Some(false);
+                            }
+                            self.roadmap_stage = Stage::Attach { tries, ends };
+                            return None;
+                        }
+                        Err(_) => return Some(false),
+                    }
+                }
+                Stage::Open(mut search) => {
+                    let Some(mut scratch) = scratch else {
+                        return Some(false);
+                    };
+                    match crate::roadmap::resume(&rm, &env, &mut search, &mut scratch, meter) {
+                        Poll::Pending => {
+                            self.roadmap_stage = Stage::Open(search);
+                            return None;
+                        }
+                        Poll::Found(len) => Stage::Found {
+                            len,
+                            tested: 0,
+                            resumed: carried,
+                        },
+                        Poll::NoPath => return Some(false),
+                    }
+                }
+                Stage::Found {
+                    len,
+                    tested,
+                    resumed,
+                } => break (len, tested, resumed || carried),
             };
-            match crate::roadmap::find_path(&rm, &env, root, goal.pos, &mut scratch, meter) {
-                Some(l) => len = l,
-                None => return false,
-            }
-        }
+        };
         // The branch fills the arena's first free slots while its nodes are read from the
         // last ones: they must not meet (a path longer than half the free slots is dropped).
         let base = if one_tree { 1 } else { self.rev.tree.len() };
         if base.saturating_add(len.saturating_mul(2)) > N {
-            return false;
+            return Some(false);
         }
         // The path's `k`-th node from the goal's end (the search left its id there).
         fn node_at<const N: usize>(
@@ -102,23 +171,50 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         ) -> Option<Point> {
             tree.spare_from_end(k).and_then(|i| rm.node(usize::from(i)))
         }
-        let node = |k: usize| node_at(&self.rev.tree, &rm, k).unwrap_or(goal.pos);
-        // The attaching segments were tested; the roadmap's own edges are tested here, against
-        // everything the map holds now. They are free of the grid it was baked for (`fits`
-        // checked its cells): for a point robot on a map whose live cells mark nothing, only
-        // the dynamic obstacles are left to test.
+        // Node `k` of the path counted from the goal's end, the goal standing for -1 and the
+        // root for `len`.
+        let node = |k: usize| {
+            if k >= len {
+                root
+            } else {
+                node_at(&self.rev.tree, &rm, k).unwrap_or(goal.pos)
+            }
+        };
+        // Segment `k` joins nodes `k - 1` and `k`. The ends (segments 0 and `len`) were tested
+        // when the search attached them, in this call unless `resumed`. The roadmap's own
+        // edges are tested here, against everything the map holds now. They are free of the
+        // grid it was baked for (`fits` checked its cells): for a point robot on a map whose
+        // live cells mark nothing, only the dynamic obstacles are left to test.
         let baked_free = self.map.radius() == 0.0 && self.map.marked_cells() == 0;
         let obstacles = units(self.map.obstacles().len());
-        for k in 1..len {
-            let (a, b) = (node(k.saturating_sub(1)), node(k));
-            let free = if baked_free {
-                meter.charge(obstacles.saturating_add(2));
-                !self.map.obstacles().blocks_segment(a, b)
-            } else {
-                env.free(a, b, meter)
-            };
-            if meter.expired(&call) || !free {
-                return false;
+        while tested <= len {
+            let k = tested;
+            let end = k == 0 || k == len;
+            if resumed || !end {
+                let a = if k == 0 {
+                    goal.pos
+                } else {
+                    node(k.saturating_sub(1))
+                };
+                let b = node(k);
+                let free = if baked_free && !end {
+                    meter.charge(obstacles.saturating_add(2));
+                    !self.map.obstacles().blocks_segment(a, b)
+                } else {
+                    env.free(a, b, meter)
+                };
+                if !free {
+                    return Some(false);
+                }
+            }
+            tested = tested.saturating_add(1);
+            if tested <= len && meter.expired(&call) {
+                self.roadmap_stage = Stage::Found {
+                    len,
+                    tested,
+                    resumed,
+                };
+                return None;
             }
         }
         // The path becomes a branch of the reverse tree below its root (the goal), and the
@@ -152,7 +248,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             self.rev.clear();
         }
         self.stats.roadmap = met;
-        met
+        Some(met)
     }
 
     /// Grafts the reverse tree below forward node `a` at reverse node `b` (their segment tested

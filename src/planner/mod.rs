@@ -332,9 +332,9 @@ pub struct Planner<'s, 'm, M, R, const N: usize, const B: usize, const K: usize>
     /// The roadmap attached ([`Planner::set_roadmap`]).
     #[cfg(feature = "roadmap")]
     roadmap: Option<crate::roadmap::Roadmap<'m>>,
-    /// A goal was set and the next call has not searched the roadmap for it yet.
+    /// Where the current goal's roadmap search stands (`roadmap_join`).
     #[cfg(feature = "roadmap")]
-    roadmap_due: bool,
+    roadmap_stage: crate::roadmap::Stage,
 }
 
 impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
@@ -406,7 +406,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             #[cfg(feature = "roadmap")]
             roadmap: None,
             #[cfg(feature = "roadmap")]
-            roadmap_due: false,
+            roadmap_stage: crate::roadmap::Stage::Idle,
         })
     }
 
@@ -430,6 +430,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
         }
         self.roadmap = roadmap;
+        // A search under way was of the roadmap before: it starts over with this one.
+        if !matches!(self.roadmap_stage, crate::roadmap::Stage::Idle) {
+            self.roadmap_stage = crate::roadmap::Stage::Due;
+        }
         Ok(())
     }
 
@@ -526,7 +530,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         });
         #[cfg(feature = "roadmap")]
         {
-            self.roadmap_due = true;
+            self.roadmap_stage = crate::roadmap::Stage::Due;
         }
         self.fwd.restart_goal_sweep();
         if self.cfg.bidirectional {
@@ -544,6 +548,10 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
     /// Forgets the goal; the tree stays.
     pub fn clear_goal(&mut self) {
         self.goal = None;
+        #[cfg(feature = "roadmap")]
+        {
+            self.roadmap_stage = crate::roadmap::Stage::Idle;
+        }
         self.rev_goal = None;
         self.rev.clear();
         self.fwd.restart_goal_sweep();

@@ -178,13 +178,21 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         while expansions < self.cfg.budget.max_expansions && !meter.expired(&steps) {
             // A new goal's first step: the roadmap's path, or the straight one (module
             // `roadmap`). Tried after a tree step or two, it cost more than it saved.
+            // A search the call's time cut short goes on in the next call, before any tree
+            // step: its scratch is the reverse arena's last slots.
             #[cfg(feature = "roadmap")]
-            if core::mem::take(&mut self.roadmap_due)
-                && self.roadmap_join(meter, steps)
-                && let Some(agent) = follow
-                && !*advanced
-            {
-                *advanced = self.follow(agent, meter, call);
+            if !matches!(self.roadmap_stage, crate::roadmap::Stage::Idle) {
+                match self.roadmap_join(meter, steps) {
+                    None => break,
+                    Some(true) => {
+                        if let Some(agent) = follow
+                            && !*advanced
+                        {
+                            *advanced = self.follow(agent, meter, call);
+                        }
+                    }
+                    Some(false) => {}
+                }
             }
             let joined = self.goal_node().is_some();
             // Each tree's expansion counts (Algorithm 1 runs `Expend_f` and then `Expend_r`,

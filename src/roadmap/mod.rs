@@ -11,16 +11,19 @@
 //!
 //! When a goal is set, the planner's first step (the `roadmap` tactic, [`crate::Tactics`])
 //! joins the goal over the straight segment when it is free, else searches the roadmap once
-//! (`find_path`): the root and the goal each attach to the nearest nodes they see (tangent at
-//! the node), a weighted A* joins them, every edge of the path found is tested free as any
-//! tree edge is (the dynamic obstacles, live cells and the robot's body count), and the path
-//! becomes a branch of the reverse tree that meets the forward tree's root (paper Algorithm
-//! 1's meet and graft). From there the planner goes on as ever: rewiring shortens the path.
-//! When the roadmap has no path, an edge is blocked or the call's time runs out, nothing is
-//! kept and the trees search as they would have. The search needs no memory of its own: the
-//! reverse arena's free slots are its scratch (`Tree::spare`), and the path it finds waits in
-//! the last of them while the branch is built in the first (a path of any length, up to half
-//! the free slots).
+//! ([`open`], [`resume`]): the root and the goal each attach to the nearest nodes they see
+//! (tangent at the node), a weighted A* joins them, every edge of the path found is tested
+//! free as any tree edge is (the dynamic obstacles, live cells and the robot's body count),
+//! and the path becomes a branch of the reverse tree that meets the forward tree's root (paper
+//! Algorithm 1's meet and graft). From there the planner goes on as ever: rewiring shortens
+//! the path. When the roadmap has no path or an edge is blocked, nothing is kept and the trees
+//! search as they would have. A call that ends first leaves the search where it stands
+//! ([`Stage`]) and the next call takes it up before any tree step, so a caller's short calls
+//! still get the roadmap's path (the path's ends are then tested again: the root or an
+//! obstacle may have moved). The search needs no memory of its own: the reverse arena's last
+//! free slots are its scratch (`Tree::spare`), kept from call to call while the trees wait,
+//! and the path it finds waits in the last of them while the branch is built in the first (a
+//! path of any length, up to half the free slots).
 //!
 //! # Format (version 1, little-endian)
 //!
@@ -469,35 +472,105 @@ fn attach<M: Metric, C: Clock + ?Sized, const K: usize>(
     seen
 }
 
-/// Weighted A* ([`WEIGHT`]) over the roadmap from `start` (the forward tree's root) to `goal`, in the arena slots
-/// `s` (at least [`Roadmap::len`] entries each). On success returns the path's length `L` in
-/// nodes and leaves them at the end of `s.heap`, the `k`-th from the goal's end at
-/// `s.heap[len - 1 - k]` (the arena's last slots: the planner reads them back there with
-/// `Tree::spare_from_end` while it fills the first ones), each consecutive pair an edge of
-/// the roadmap, the first seen from the goal and the last from the root over free segments
-/// (the edges between them are not tested here). A path of any length fits: the heap is no
-/// longer needed and has a slot per roadmap node. Bounded: each node is closed once, and the
-/// search stops at the call's deadline.
+/// Where a roadmap search stands between two planner calls (the planner keeps it; the search's
+/// scratch stays in the arena's last slots, which nothing else writes while it is open). A
+/// call that ends before the search does leaves it here, and the next call takes it up where
+/// it stopped: the trees do not grow meanwhile, so a caller's short calls lose nothing.
+#[derive(Clone, Debug, Default)]
+pub(crate) enum Stage {
+    /// No search: no goal, no roadmap, or this goal's search has ended.
+    #[default]
+    Idle,
+    /// A goal was set: the next call tests the straight segment to it.
+    Due,
+    /// The straight segment is blocked: the search attaches the goal (`ends`, empty until
+    /// done) and then the root ([`open`]). `tries`: calls that ran out of time here without
+    /// attaching an end; [`OPEN_TRIES`] of them end the goal's search.
+    Attach {
+        tries: u8,
+        ends: heapless::Vec<(u16, f32), ATTACH>,
+    },
+    /// The A* is under way.
+    Open(Search),
+    /// A path of `len` nodes waits at the arena's end (`len` 0: the straight segment); its
+    /// segments before `tested` were found free (counted from the goal's end, segment `k`
+    /// joining path nodes `k - 1` and `k`, the goal and the root standing for nodes -1 and
+    /// `len`). `resumed`: the path was found in an earlier call than the ends were tested
+    /// in, so they are tested again (the root may have moved, an obstacle too).
+    Found {
+        len: usize,
+        tested: usize,
+        resumed: bool,
+    },
+}
+
+/// Calls in a row that may run out of time while attaching an end of the search (up to
+/// [`ATTACH_CANDIDATES`] segment tests, which do not resume) before the goal's search is given
+/// up: on a clock whose calls are always too short for them the trees must not wait for ever.
+pub(crate) const OPEN_TRIES: u8 = 4;
+
+/// An open weighted A* ([`WEIGHT`]) over the roadmap ([`open`], [`resume`]): what is not
+/// in the arena's slots.
+#[derive(Clone, Debug)]
+pub(crate) struct Search {
+    goal: Point,
+    /// The nodes the goal sees, with their distances.
+    ends: heapless::Vec<(u16, f32), ATTACH>,
+    /// The open set's size (its heap is `Scratch::heap`'s first entries).
+    open: usize,
+    /// The best way to the goal so far: its length and its last roadmap node.
+    best: (f32, u16),
+}
+
+/// What a search's call ended with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Poll {
+    /// The call's time ran out first: take it up again.
+    Pending,
+    /// A path of this many nodes ([`resume`]).
+    Found(usize),
+    /// The roadmap has no way.
+    NoPath,
+}
+
+/// Opens the weighted A* ([`WEIGHT`]) over the roadmap from `start` (the forward tree's root)
+/// to `goal`, in the arena slots `s` (at least [`Roadmap::len`] entries each): attaches the
+/// goal (unless `ends` holds its nodes already) and the root ([`attach`]) and puts the root's
+/// nodes in the open set. `Err((Poll::Pending, ends))` when the call's time ran out first,
+/// with the goal's nodes when they were found (an attach cut short is not a verdict);
+/// `Err((Poll::NoPath, _))` when either end sees no node.
 #[inline(never)]
-pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
+#[allow(clippy::type_complexity)] // the goal's nodes handed back to the next call
+pub(crate) fn open<M: Metric, C: Clock + ?Sized, const K: usize>(
     rm: &Roadmap<'_>,
     env: &Env<'_, '_, M, K>,
-    start: Point,
-    goal: Point,
+    (start, goal): (Point, Point),
+    ends: heapless::Vec<(u16, f32), ATTACH>,
     s: &mut Scratch<'_>,
     meter: &Meter<'_, C>,
-) -> Option<usize> {
+) -> Result<Search, (Poll, heapless::Vec<(u16, f32), ATTACH>)> {
     let n = rm.len();
     if n == 0 || s.g.len() < n || s.parent.len() < n || s.heap.len() < n || s.slot.len() < n {
-        return None;
+        return Err((Poll::NoPath, ends));
     }
-    let ends = attach(rm, env, goal, meter);
-    if ends.is_empty() {
-        return None;
-    }
+    let ends = if ends.is_empty() {
+        let ends = attach(rm, env, goal, meter);
+        if meter.expired(&env.call) {
+            return Err((Poll::Pending, heapless::Vec::new()));
+        }
+        if ends.is_empty() {
+            return Err((Poll::NoPath, ends));
+        }
+        ends
+    } else {
+        ends
+    };
     let starts = attach(rm, env, start, meter);
+    if meter.expired(&env.call) {
+        return Err((Poll::Pending, ends));
+    }
     if starts.is_empty() {
-        return None;
+        return Err((Poll::NoPath, ends));
     }
     for i in 0..n {
         wr(s.g, i, UNSEEN);
@@ -505,37 +578,68 @@ pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
     }
     meter.charge(units(n >> 3).saturating_add(1));
     let h = |p: Point| WEIGHT * p.dist(goal);
-    let mut len = 0usize;
+    let mut open = 0usize;
     for &(i, d) in &starts {
         let iu = usize::from(i);
         let Some(p) = rm.node(iu) else { continue };
         wr(s.g, iu, Point::new(d, d + h(p)));
         wr(s.parent, iu, u16::MAX);
-        wr(s.heap, len, i);
-        wr(s.slot, iu, slot_of(len));
-        len = len.saturating_add(1);
-        s.sift(len.saturating_sub(1), len);
+        wr(s.heap, open, i);
+        wr(s.slot, iu, slot_of(open));
+        open = open.saturating_add(1);
+        s.sift(open.saturating_sub(1), open);
     }
-    let mut best = (f32::INFINITY, u16::MAX);
-    while len > 0 {
+    Ok(Search {
+        goal,
+        ends,
+        open,
+        best: (f32::INFINITY, u16::MAX),
+    })
+}
+
+/// Runs an open search on until it ends or the call's time runs out ([`Poll::Pending`]: the
+/// scratch `s` must be handed back unchanged to the next call's). On success returns the
+/// path's length `L` in nodes and leaves them at the end of `s.heap`, the `k`-th from the
+/// goal's end at `s.heap[len - 1 - k]` (the arena's last slots: the planner reads them back
+/// there with `Tree::spare_from_end` while it fills the first ones), each consecutive pair an
+/// edge of the roadmap, the first seen from the goal and the last from the root over free
+/// segments (the edges between them are not tested here). A path of any length fits: the
+/// heap is no longer needed and has a slot per roadmap node. Bounded: each node is closed
+/// once, and the search stops at the call's deadline.
+#[inline(never)]
+pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
+    rm: &Roadmap<'_>,
+    env: &Env<'_, '_, M, K>,
+    search: &mut Search,
+    s: &mut Scratch<'_>,
+    meter: &Meter<'_, C>,
+) -> Poll {
+    let n = rm.len();
+    if n == 0 || s.g.len() < n || s.parent.len() < n || s.heap.len() < n || s.slot.len() < n {
+        return Poll::NoPath;
+    }
+    let goal = search.goal;
+    let h = |p: Point| WEIGHT * p.dist(goal);
+    while search.open > 0 {
         if meter.expired(&env.call) {
-            return None;
+            return Poll::Pending;
         }
         let i = rd(s.heap, 0, 0);
-        if s.key(i) >= best.0 {
+        if s.key(i) >= search.best.0 {
             break;
         }
         // Pop the top.
-        len = len.saturating_sub(1);
+        search.open = search.open.saturating_sub(1);
+        let len = search.open;
         s.swap(0, len);
         wr(s.slot, usize::from(i), CLOSED);
         s.sift(0, len);
         let iu = usize::from(i);
         let gi = s.dist(iu);
-        if let Some(&(_, d)) = ends.iter().find(|&&(e, _)| e == i)
-            && gi + d < best.0
+        if let Some(&(_, d)) = search.ends.iter().find(|&&(e, _)| e == i)
+            && gi + d < search.best.0
         {
-            best = (gi + d, i);
+            search.best = (gi + d, i);
         }
         let Some(pi) = rm.node(iu) else { continue };
         let mut work = 2u32;
@@ -561,34 +665,36 @@ pub(crate) fn find_path<M: Metric, C: Clock + ?Sized, const K: usize>(
                 wr(s.g, j, Point::new(nd, nd + h(pj)));
                 wr(s.parent, j, i);
                 if sj == 0 {
-                    wr(s.heap, len, ju);
-                    wr(s.slot, j, slot_of(len));
-                    len = len.saturating_add(1);
-                    s.sift(len.saturating_sub(1), len);
+                    let at = search.open;
+                    wr(s.heap, at, ju);
+                    wr(s.slot, j, slot_of(at));
+                    search.open = at.saturating_add(1);
+                    s.sift(at, search.open);
                 } else {
-                    s.sift(usize::from(sj).saturating_sub(1), len);
+                    s.sift(usize::from(sj).saturating_sub(1), search.open);
                 }
             }
         }
         meter.charge(work);
     }
-    if best.1 == u16::MAX {
-        return None;
+    search.open = 0;
+    if search.best.1 == u16::MAX {
+        return Poll::NoPath;
     }
     // The chain of parents, written from the heap's last slot down (at most `n` nodes: each
     // node has one parent, set when it was opened, and the attach nodes none).
     let end = s.heap.len();
-    let mut at = best.1;
+    let mut at = search.best.1;
     let mut len = 0usize;
     while at != u16::MAX {
         if len >= n || len >= end {
-            return None;
+            return Poll::NoPath;
         }
         wr(s.heap, end.saturating_sub(1).saturating_sub(len), at);
         len = len.saturating_add(1);
         at = rd(s.parent, usize::from(at), u16::MAX);
     }
-    Some(len)
+    Poll::Found(len)
 }
 
 #[cfg(test)]

@@ -250,30 +250,32 @@ fn a_roadmap_of_another_map_or_too_large_is_refused() {
     assert!(!p.stats().roadmap);
 }
 
-/// Found on a MovingAI maze of 8-cell corridors (issue 42): its legs' roadmap paths have 164-201
-/// nodes and the search kept at most 128, so the roadmap never joined there and its search
-/// was wasted. The path now stays in the arena's last free slots, whatever its length. A comb
-/// of 70 walls, from the top and the bottom in turn (1 m cells, two free columns between
-/// them): the way zigzags round every wall's end, 140 roadmap nodes. With 512 slots a tree the
-/// goal joins over them in the first call; with 256 the branch and the path would overlap in
-/// the arena, so the path is dropped and the trees search.
-#[test]
-fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
-    const WALLS: u16 = 70;
-    const COLS: u16 = 3 * WALLS + 3;
-    const ROWS: u16 = 20;
-    const BYTES: usize = OccupancyGrid::bytes_needed(COLS, ROWS);
+/// The comb of [`regression_a_roadmap_path_longer_than_128_nodes_joins`]: 70 walls, from the
+/// top and the bottom in turn (1 m cells, two free columns between them).
+const WALLS: u16 = 70;
+const COMB_COLS: u16 = 3 * WALLS + 3;
+const COMB_ROWS: u16 = 20;
+const COMB_BYTES: usize = OccupancyGrid::bytes_needed(COMB_COLS, COMB_ROWS);
+
+fn comb_bits() -> [u8; COMB_BYTES] {
     let top = |i: u16| i.is_multiple_of(2);
-    let mut bits = [0u8; BYTES];
-    pack_grid(&mut bits, COLS, ROWS, |c, r| {
+    let mut bits = [0u8; COMB_BYTES];
+    pack_grid(&mut bits, COMB_COLS, COMB_ROWS, |c, r| {
         c >= 2 && (c - 2) % 3 == 0 && {
             let i = (c - 2) / 3;
             i < WALLS && if top(i) { r <= 15 } else { r >= 4 }
         }
     })
     .unwrap();
-    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
-    // Half a cell off each wall's end, either side of it; a chain of edges.
+    bits
+}
+
+/// The comb's roadmap, written into `buf` (its length returned), with a start and a goal at
+/// its two ends and the length of the roadmap's way between them: a node half a cell off
+/// each wall's end, either side of it, in a chain of edges. The start sees past the first
+/// node and the goal past the last: the shortest way over the roadmap leaves both out.
+fn comb_roadmap(grid: &OccupancyGrid<'_>, buf: &mut [u8]) -> (usize, (Point, Point), f32) {
+    let top = |i: u16| i.is_multiple_of(2);
     let mut nodes = [Point::ZERO; 2 * WALLS as usize];
     for i in 0..WALLS {
         let c = f32::from(3 * i + 2);
@@ -298,41 +300,54 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
         }
     }
     first[n] = e as u32;
-    let mut buf = [0u8; 4096];
-    let len = write(&grid, &nodes, &corners, &first, &far, &mut buf).unwrap();
-    let rm = Roadmap::from_bytes(&buf[..len]).unwrap();
-    let (start, goal) = (
+    let len = write(grid, &nodes, &corners, &first, &far, buf).unwrap();
+    let ends = (
         Point::new(0.5, 17.5),
-        Point::new(f32::from(COLS) - 1.5, 2.5),
+        Point::new(f32::from(COMB_COLS) - 1.5, 2.5),
     );
-    // The start sees past the first node and the goal past the last: the shortest way over
-    // the roadmap leaves both out.
     let inner = &nodes[1..n - 1];
-    let want = start.dist(inner[0])
+    let want = ends.0.dist(inner[0])
         + inner.windows(2).map(|w| w[0].dist(w[1])).sum::<f32>()
-        + inner[inner.len() - 1].dist(goal);
+        + inner[inner.len() - 1].dist(ends.1);
+    (len, ends, want)
+}
+
+/// A planner of `N` slots a tree on the comb, the roadmap attached and the goal set.
+fn comb<'s, 'm, const N: usize>(
+    storage: &'s mut Storage<N, 16>,
+    grid: OccupancyGrid<'m>,
+    rm: Roadmap<'m>,
+    cfg: Config,
+    (start, goal): (Point, Point),
+) -> Planner<'s, 'm, Euclidean, rand_xorshift::XorShiftRng, N, 16, 2> {
+    let rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
+    let mut p = Planner::new(storage, Map::<2>::new(grid), Euclidean, rng, cfg, start).unwrap();
+    p.set_roadmap(Some(rm)).unwrap();
+    p.set_goal(goal).unwrap();
+    p
+}
+
+/// Found on a MovingAI maze of 8-cell corridors (issue 42): its legs' roadmap paths have 164-201
+/// nodes and the search kept at most 128, so the roadmap never joined there and its search
+/// was wasted. The path now stays in the arena's last free slots, whatever its length. On the
+/// comb the way zigzags round every wall's end, 140 roadmap nodes. With 512 slots a tree the
+/// goal joins over them in the first call; with 256 the branch and the path would overlap in
+/// the arena, so the path is dropped and the trees search.
+#[test]
+fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
+    let bits = comb_bits();
+    let grid = OccupancyGrid::new(&bits, COMB_COLS, COMB_ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 4096];
+    let (len, ends, want) = comb_roadmap(&grid, &mut buf);
+    let rm = Roadmap::from_bytes(&buf[..len]).unwrap();
     let mut cfg = Config::default().for_grid(&grid);
     cfg.bidirectional = false;
     cfg.budget.max_expansions = 1;
     let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
-    // A planner of `N` slots a tree on the comb, the roadmap attached and the goal set.
-    fn comb<'s, 'm, const N: usize>(
-        storage: &'s mut Storage<N, 16>,
-        grid: OccupancyGrid<'m>,
-        rm: Roadmap<'m>,
-        cfg: Config,
-        (start, goal): (Point, Point),
-    ) -> Planner<'s, 'm, Euclidean, rand_xorshift::XorShiftRng, N, 16, 2> {
-        let rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
-        let mut p = Planner::new(storage, Map::<2>::new(grid), Euclidean, rng, cfg, start).unwrap();
-        p.set_roadmap(Some(rm)).unwrap();
-        p.set_goal(goal).unwrap();
-        p
-    }
     // 512 slots: the 140-node branch joins in the first call, its cost the roadmap path's.
     let mut storage = Storage::<512, 16>::new();
-    let mut p = comb(&mut storage, grid, rm, cfg, (start, goal));
-    let progress = p.plan(&clock, start).unwrap();
+    let mut p = comb(&mut storage, grid, rm, cfg, ends);
+    let progress = p.plan(&clock, ends.0).unwrap();
     assert!(progress.goal_in_tree && p.stats().roadmap);
     let first_cost = p.stats().first_cost.unwrap();
     assert!((first_cost - want).abs() < 1e-2, "{first_cost} vs {want}");
@@ -344,8 +359,67 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
     }
     // 256 slots: 1 + 2 x 140 > 256, the path is dropped; the arena is left empty.
     let mut storage = Storage::<256, 16>::new();
-    let mut p = comb(&mut storage, grid, rm, cfg, (start, goal));
-    p.plan(&clock, start).unwrap();
+    let mut p = comb(&mut storage, grid, rm, cfg, ends);
+    p.plan(&clock, ends.0).unwrap();
     assert!(!p.stats().roadmap);
     assert_eq!(p.reverse_tree().len(), 0);
+}
+
+/// Found on the MovingAI maze with calls of 50 us (issue 42): the roadmap's search ran only in
+/// a new goal's first call and was dropped at that call's deadline, so a caller whose calls
+/// are shorter than the search never got the roadmap's path (the trees took 11-16 ms where
+/// the search takes 0.25 ms). The search now goes on in the next calls, the trees waiting.
+/// On the comb, with calls of 2 us (200 work units) and with a clock that never advances and
+/// a work cap of 300 units a call, one tree and two: the goal joins over the roadmap after
+/// several calls, with the roadmap path's cost, before any tree expansion; every segment of
+/// the path is free.
+#[test]
+fn regression_a_call_shorter_than_the_roadmap_search_keeps_it() {
+    let bits = comb_bits();
+    let grid = OccupancyGrid::new(&bits, COMB_COLS, COMB_ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 4096];
+    let (len, ends, want) = comb_roadmap(&grid, &mut buf);
+    let rm = Roadmap::from_bytes(&buf[..len]).unwrap();
+    for bidirectional in [false, true] {
+        for frozen in [false, true] {
+            let mut cfg = Config::default().for_grid(&grid);
+            cfg.bidirectional = bidirectional;
+            let clock = if frozen {
+                cfg.budget.max_work = 300;
+                FakeClock::nanos()
+            } else {
+                cfg.budget.t_exp = core::time::Duration::from_micros(2);
+                FakeClock::nanos().with_work_cost(10).with_step(1)
+            };
+            let case = (bidirectional, frozen);
+            let mut storage = Storage::<512, 16>::new();
+            let mut p = comb(&mut storage, grid, rm, cfg, ends);
+            let mut calls = 0;
+            while calls < 100 {
+                calls += 1;
+                let progress = p.plan(&clock, ends.0).unwrap();
+                if progress.goal_in_tree {
+                    break;
+                }
+                assert_eq!(
+                    p.stats().expansions,
+                    0,
+                    "{case:?}: the trees wait (call {calls})"
+                );
+            }
+            assert!(calls > 2, "{case:?}: the search fits one call ({calls})");
+            assert!(p.stats().roadmap, "{case:?}: joined without the roadmap");
+            let first_cost = p.stats().first_cost.unwrap();
+            assert!(
+                (first_cost - want).abs() < 1e-2,
+                "{case:?}: {first_cost} vs {want}"
+            );
+            let mut path = [Point::ZERO; 512];
+            let info = p.path(&mut path).unwrap();
+            assert!(info.to_goal, "{case:?}");
+            for w in path[..info.len].windows(2) {
+                assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
+            }
+        }
+    }
 }
