@@ -368,7 +368,7 @@ table! {
     switch "recycle_when_full", "tactics", "", Any, "a full arena trades a leaf that cannot improve the path", tactics.recycle_when_full;
     switch "corner_cuts", "tactics", "", Any, "a path node hidden from its grandparent cuts the corner", tactics.corner_cuts;
     switch "open_frontier", "tactics", "", Any, "the goal-rewiring sweep enqueues every unseen neighbour untested", tactics.open_frontier;
-    switch "roadmap", "tactics", "", Any, "a new goal's first call searches the attached roadmap for its first path", tactics.roadmap;
+    switch "roadmap", "tactics", "", Any, "a new goal's first call searches the attached roadmap for its first path (the next calls go on with a search it did not end)", tactics.roadmap;
     // As printed (`AsPrinted`).
     switch "alg4_take", "as_printed", "", Any, "Algorithm 4 dequeues x_r2 (else peeks it)", as_printed.alg4_takes_x_r2;
     switch "alg6_take", "as_printed", "", Any, "Algorithm 6 pops x_r2 (else peeks it)", as_printed.alg6_takes_x_r2;

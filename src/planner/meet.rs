@@ -97,40 +97,20 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                             tested: 0,
                             resumed: false,
                         }
+                    } else if meter.expired(&call) {
+                        self.roadmap_stage = Stage::Blocked;
+                        return None;
                     } else {
-                        let next = Stage::Attach {
-                            tries: 0,
-                            ends: heapless::Vec::new(),
-                        };
-                        if meter.expired(&call) {
-                            self.roadmap_stage = next;
-                            return None;
-                        }
-                        next
+                        Stage::Blocked
                     }
                 }
-                Stage::Attach { tries, ends } => {
+                Stage::Blocked => {
                     let Some(mut scratch) = scratch else {
                         return Some(false);
                     };
-                    let had = !ends.is_empty();
-                    let ends_at = (root, goal.pos);
-                    match crate::roadmap::open(&rm, &env, ends_at, ends, &mut scratch, meter) {
-                        Ok(search) => Stage::Open(search),
-                        Err((Poll::Pending, ends)) => {
-                            // A call that attached the goal made progress: the count restarts.
-                            let tries = if ends.is_empty() || had {
-                                tries.saturating_add(1)
-                            } else {
-                                0
-                            };
-                            if tries >= crate::roadmap::OPEN_TRIES {
-                                return Some(false);
-                            }
-                            self.roadmap_stage = Stage::Attach { tries, ends };
-                            return None;
-                        }
-                        Err(_) => return Some(false),
+                    match crate::roadmap::open(&rm, (root, goal.pos), &mut scratch, meter) {
+                        Some(search) => Stage::Open(search),
+                        None => return Some(false),
                     }
                 }
                 Stage::Open(mut search) => {
@@ -181,7 +161,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
         };
         // Segment `k` joins nodes `k - 1` and `k`. The ends (segments 0 and `len`) were tested
-        // when the search attached them, in this call unless `resumed`. The roadmap's own
+        // when the search settled on its way, in this call unless `resumed`. The roadmap's own
         // edges are tested here, against everything the map holds now. They are free of the
         // grid it was baked for (`fits` checked its cells): for a point robot on a map whose
         // live cells mark nothing, only the dynamic obstacles are left to test.

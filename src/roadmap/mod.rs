@@ -11,9 +11,10 @@
 //!
 //! When a goal is set, the planner's first step (the `roadmap` tactic, [`crate::Tactics`])
 //! joins the goal over the straight segment when it is free, else searches the roadmap once
-//! ([`open`], [`resume`]): the root and the goal each attach to the nearest nodes they see
-//! (tangent at the node), a weighted A* joins them, every edge of the path found is tested
-//! free as any tree edge is (the dynamic obstacles, live cells and the robot's body count),
+//! ([`open`], [`resume`]): the root and the goal each attach to their nearest nodes (tangent
+//! at the node; the root's tested first, the goal's only once a way the search settles on
+//! ends there: a node the goal does not see is dropped and the search goes on without it), a
+//! weighted A* joins them, every edge of the path found is tested free as any tree edge is (the dynamic obstacles, live cells and the robot's body count),
 //! and the path becomes a branch of the reverse tree that meets the forward tree's root (paper
 //! Algorithm 1's meet and graft). From there the planner goes on as ever: rewiring shortens
 //! the path. When the roadmap has no path or an edge is blocked, nothing is kept and the trees
@@ -62,7 +63,8 @@ pub const MAX_NODES: usize = u16::MAX as usize - 1;
 
 /// Nodes the root and the goal each consider, nearest first (tangent at the node).
 const ATTACH_CANDIDATES: usize = 8;
-/// Nodes the root and the goal each attach to, at most (those of the candidates they see).
+/// Nodes the root attaches to, at most: the first of its candidates it sees (each tested
+/// before the search opens). The goal's candidates are tested only when a way uses them.
 const ATTACH: usize = 6;
 /// The A* heuristic's weight: the straight distance to the goal counts twice, so the search
 /// pops far fewer nodes on a dense roadmap (a map of many small obstacles has 20-40 edges a
@@ -395,17 +397,17 @@ fn slot_of(k: usize) -> u16 {
     u16::try_from(k.saturating_add(1)).unwrap_or(CLOSED)
 }
 
-/// The nodes of `rm` that `p` sees over a free segment tangent at the node, nearest first,
-/// with their distances: the [`ATTACH_CANDIDATES`] nearest tangent nodes are tested, at most
-/// [`ATTACH`] kept. The nodes come in order of `x`: the scan starts at `p.x` and widens both
-/// ways until a column of nodes is farther in `x` alone than the farthest candidate kept.
+/// An end's candidates: the nearest nodes tangent at the node, nearest first, with their
+/// distances (their segments to the end not tested yet).
+type Candidates = heapless::Vec<(u16, f32), ATTACH_CANDIDATES>;
+
+/// The [`ATTACH_CANDIDATES`] nodes of `rm` nearest `p` whose segment from `p` is tangent at
+/// the node, nearest first, with their distances; whether `p` sees them is tested later, and
+/// only for the nodes a path found uses ([`resume`]). The nodes come in order of `x`: the scan
+/// starts at `p.x` and widens both ways until a column of nodes is farther in `x` alone than
+/// the farthest candidate kept.
 #[inline(never)]
-fn attach<M: Metric, C: Clock + ?Sized, const K: usize>(
-    rm: &Roadmap<'_>,
-    env: &Env<'_, '_, M, K>,
-    p: Point,
-    meter: &Meter<'_, C>,
-) -> heapless::Vec<(u16, f32), ATTACH> {
+fn attach<C: Clock + ?Sized>(rm: &Roadmap<'_>, p: Point, meter: &Meter<'_, C>) -> Candidates {
     let mut near: heapless::Vec<(f32, u16), ATTACH_CANDIDATES> = heapless::Vec::new();
     let x = |i: usize| rm.node(i).map_or(f32::INFINITY, |n| n.x);
     // The first node with x >= p.x.
@@ -458,18 +460,9 @@ fn attach<M: Metric, C: Clock + ?Sized, const K: usize>(
         }
     }
     meter.charge((visited >> 2).saturating_add(4));
-    let mut seen = heapless::Vec::new();
-    for &(d2, i) in &near {
-        if seen.is_full() || meter.expired(&env.call) {
-            break;
-        }
-        if let Some(n) = rm.node(usize::from(i))
-            && env.free(p, n, meter)
-        {
-            let _ = seen.push((i, crate::geometry::sqrt(d2)));
-        }
-    }
-    seen
+    near.iter()
+        .map(|&(d2, i)| (i, crate::geometry::sqrt(d2)))
+        .collect()
 }
 
 /// Where a roadmap search stands between two planner calls (the planner keeps it; the search's
@@ -483,13 +476,8 @@ pub(crate) enum Stage {
     Idle,
     /// A goal was set: the next call tests the straight segment to it.
     Due,
-    /// The straight segment is blocked: the search attaches the goal (`ends`, empty until
-    /// done) and then the root ([`open`]). `tries`: calls that ran out of time here without
-    /// attaching an end; [`OPEN_TRIES`] of them end the goal's search.
-    Attach {
-        tries: u8,
-        ends: heapless::Vec<(u16, f32), ATTACH>,
-    },
+    /// The straight segment is blocked: the next call opens the search ([`open`]).
+    Blocked,
     /// The A* is under way.
     Open(Search),
     /// A path of `len` nodes waits at the arena's end (`len` 0: the straight segment); its
@@ -504,18 +492,20 @@ pub(crate) enum Stage {
     },
 }
 
-/// Calls in a row that may run out of time while attaching an end of the search (up to
-/// [`ATTACH_CANDIDATES`] segment tests, which do not resume) before the goal's search is given
-/// up: on a clock whose calls are always too short for them the trees must not wait for ever.
-pub(crate) const OPEN_TRIES: u8 = 4;
-
 /// An open weighted A* ([`WEIGHT`]) over the roadmap ([`open`], [`resume`]): what is not
 /// in the arena's slots.
 #[derive(Clone, Debug)]
 pub(crate) struct Search {
+    start: Point,
     goal: Point,
-    /// The nodes the goal sees, with their distances.
-    ends: heapless::Vec<(u16, f32), ATTACH>,
+    /// The root's and the goal's candidates ([`attach`]): a candidate whose segment to its
+    /// end is found blocked is dropped.
+    starts: Candidates,
+    ends: Candidates,
+    /// Bit `i` set: candidate `i` of `starts` (`ends`) was seen from its end.
+    seen: (u8, u8),
+    /// The root's candidates were tested and the open set holds those it sees.
+    ready: bool,
     /// The open set's size (its heap is `Scratch::heap`'s first entries).
     open: usize,
     /// The best way to the goal so far: its length and its last roadmap node.
@@ -533,79 +523,144 @@ pub(crate) enum Poll {
     NoPath,
 }
 
+/// Whether the scratch has a slot per roadmap node.
+fn fits(rm: &Roadmap<'_>, s: &Scratch<'_>) -> bool {
+    let n = rm.len();
+    n > 0 && s.g.len() >= n && s.parent.len() >= n && s.heap.len() >= n && s.slot.len() >= n
+}
+
 /// Opens the weighted A* ([`WEIGHT`]) over the roadmap from `start` (the forward tree's root)
-/// to `goal`, in the arena slots `s` (at least [`Roadmap::len`] entries each): attaches the
-/// goal (unless `ends` holds its nodes already) and the root ([`attach`]) and puts the root's
-/// nodes in the open set. `Err((Poll::Pending, ends))` when the call's time ran out first,
-/// with the goal's nodes when they were found (an attach cut short is not a verdict);
-/// `Err((Poll::NoPath, _))` when either end sees no node.
+/// to `goal`, in the arena slots `s` (at least [`Roadmap::len`] entries each): finds each
+/// end's candidates ([`attach`]); `None` when either end has none. No segment is tested
+/// here ([`resume`] tests them).
 #[inline(never)]
-#[allow(clippy::type_complexity)] // the goal's nodes handed back to the next call
-pub(crate) fn open<M: Metric, C: Clock + ?Sized, const K: usize>(
+pub(crate) fn open<C: Clock + ?Sized>(
     rm: &Roadmap<'_>,
-    env: &Env<'_, '_, M, K>,
     (start, goal): (Point, Point),
-    ends: heapless::Vec<(u16, f32), ATTACH>,
     s: &mut Scratch<'_>,
     meter: &Meter<'_, C>,
-) -> Result<Search, (Poll, heapless::Vec<(u16, f32), ATTACH>)> {
-    let n = rm.len();
-    if n == 0 || s.g.len() < n || s.parent.len() < n || s.heap.len() < n || s.slot.len() < n {
-        return Err((Poll::NoPath, ends));
+) -> Option<Search> {
+    if !fits(rm, s) {
+        return None;
     }
-    let ends = if ends.is_empty() {
-        let ends = attach(rm, env, goal, meter);
-        if meter.expired(&env.call) {
-            return Err((Poll::Pending, heapless::Vec::new()));
-        }
-        if ends.is_empty() {
-            return Err((Poll::NoPath, ends));
-        }
-        ends
-    } else {
-        ends
-    };
-    let starts = attach(rm, env, start, meter);
-    if meter.expired(&env.call) {
-        return Err((Poll::Pending, ends));
+    let ends = attach(rm, goal, meter);
+    let starts = attach(rm, start, meter);
+    if ends.is_empty() || starts.is_empty() {
+        return None;
     }
-    if starts.is_empty() {
-        return Err((Poll::NoPath, ends));
-    }
-    for i in 0..n {
-        wr(s.g, i, UNSEEN);
-        wr(s.slot, i, 0);
-    }
-    meter.charge(units(n >> 3).saturating_add(1));
-    let h = |p: Point| WEIGHT * p.dist(goal);
-    let mut open = 0usize;
-    for &(i, d) in &starts {
-        let iu = usize::from(i);
-        let Some(p) = rm.node(iu) else { continue };
-        wr(s.g, iu, Point::new(d, d + h(p)));
-        wr(s.parent, iu, u16::MAX);
-        wr(s.heap, open, i);
-        wr(s.slot, iu, slot_of(open));
-        open = open.saturating_add(1);
-        s.sift(open.saturating_sub(1), open);
-    }
-    Ok(Search {
+    Some(Search {
+        start,
         goal,
+        starts,
         ends,
-        open,
+        seen: (0, 0),
+        ready: false,
+        open: 0,
         best: (f32::INFINITY, u16::MAX),
     })
 }
 
+impl Search {
+    /// Empties the scratch and opens the root's candidates.
+    fn restart<C: Clock + ?Sized>(
+        &mut self,
+        rm: &Roadmap<'_>,
+        s: &mut Scratch<'_>,
+        meter: &Meter<'_, C>,
+    ) {
+        let n = rm.len();
+        for i in 0..n {
+            wr(s.g, i, UNSEEN);
+            wr(s.slot, i, 0);
+        }
+        meter.charge(units(n >> 3).saturating_add(1));
+        let goal = self.goal;
+        let h = |p: Point| WEIGHT * p.dist(goal);
+        self.open = 0;
+        self.best = (f32::INFINITY, u16::MAX);
+        for &(i, d) in &self.starts {
+            let iu = usize::from(i);
+            let Some(p) = rm.node(iu) else { continue };
+            if d >= s.dist(iu) {
+                continue;
+            }
+            wr(s.g, iu, Point::new(d, d + h(p)));
+            wr(s.parent, iu, u16::MAX);
+            let at = match rd(s.slot, iu, 0) {
+                0 => {
+                    let at = self.open;
+                    wr(s.heap, at, i);
+                    wr(s.slot, iu, slot_of(at));
+                    self.open = at.saturating_add(1);
+                    at
+                }
+                k => usize::from(k).saturating_sub(1),
+            };
+            s.sift(at, self.open);
+        }
+    }
+
+    /// The best way over the goal's candidates whose node is closed (its distance final).
+    fn rebest(&mut self, s: &Scratch<'_>) {
+        self.best = (f32::INFINITY, u16::MAX);
+        for &(e, d) in &self.ends {
+            if rd(s.slot, usize::from(e), 0) == CLOSED {
+                let via = s.dist(usize::from(e)) + d;
+                if via < self.best.0 {
+                    self.best = (via, e);
+                }
+            }
+        }
+    }
+}
+
+/// Tests the segment from end `p` to its candidate `node` unless it was seen before (`seen`,
+/// bit `k` for candidate `k` of `list`); a blocked candidate is dropped from `list`. Returns
+/// whether it is free.
+fn sees<M: Metric, C: Clock + ?Sized, const K: usize>(
+    rm: &Roadmap<'_>,
+    env: &Env<'_, '_, M, K>,
+    p: Point,
+    node: u16,
+    list: &mut Candidates,
+    seen: &mut u8,
+    meter: &Meter<'_, C>,
+) -> bool {
+    let Some(k) = list.iter().position(|&(i, _)| i == node) else {
+        return false;
+    };
+    let bit = 1u8
+        .checked_shl(u32::try_from(k).unwrap_or(u32::MAX))
+        .unwrap_or(0);
+    if *seen & bit != 0 {
+        return true;
+    }
+    let free = rm
+        .node(usize::from(node))
+        .is_some_and(|n| env.free(p, n, meter));
+    if free {
+        *seen |= bit;
+    } else {
+        // Dropping candidate `k` moves the later ones down a place: so do their bits.
+        let low = bit.wrapping_sub(1);
+        *seen = (*seen & low) | ((*seen >> 1) & !low);
+        list.remove(k);
+    }
+    free
+}
+
 /// Runs an open search on until it ends or the call's time runs out ([`Poll::Pending`]: the
-/// scratch `s` must be handed back unchanged to the next call's). On success returns the
-/// path's length `L` in nodes and leaves them at the end of `s.heap`, the `k`-th from the
-/// goal's end at `s.heap[len - 1 - k]` (the arena's last slots: the planner reads them back
-/// there with `Tree::spare_from_end` while it fills the first ones), each consecutive pair an
-/// edge of the roadmap, the first seen from the goal and the last from the root over free
-/// segments (the edges between them are not tested here). A path of any length fits: the
-/// heap is no longer needed and has a slot per roadmap node. Bounded: each node is closed
-/// once, and the search stops at the call's deadline.
+/// scratch `s` must be handed back unchanged to the next call's). The root's candidates are
+/// tested first, [`ATTACH`] kept of those it sees; when the search settles on a way, the
+/// segment from the goal to the way's last node is tested (each candidate once): a goal's
+/// candidate the goal does not see is dropped and the search goes on. On
+/// success returns the path's length `L` in nodes and leaves them at the end of `s.heap`, the
+/// `k`-th from the goal's end at `s.heap[len - 1 - k]` (the arena's last slots: the planner
+/// reads them back there with `Tree::spare_from_end` while it fills the first ones), each
+/// consecutive pair an edge of the roadmap, the first seen from the goal and the last from the
+/// root over free segments (the edges between them are not tested here). A path of any length
+/// fits: the heap is no longer needed and has a slot per roadmap node. Bounded: each node is
+/// closed once per start, and the search stops at the call's deadline.
 #[inline(never)]
 pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
     rm: &Roadmap<'_>,
@@ -614,75 +669,149 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
     s: &mut Scratch<'_>,
     meter: &Meter<'_, C>,
 ) -> Poll {
-    let n = rm.len();
-    if n == 0 || s.g.len() < n || s.parent.len() < n || s.heap.len() < n || s.slot.len() < n {
+    if !fits(rm, s) {
         return Poll::NoPath;
     }
+    let n = rm.len();
     let goal = search.goal;
     let h = |p: Point| WEIGHT * p.dist(goal);
-    while search.open > 0 {
+    if !search.ready {
+        // The root's candidates, nearest first, each tested once, until [`ATTACH`] are seen:
+        // a root's node found blocked later would cost the search a new start.
+        let mut k = 0usize;
+        while let Some(&(node, _)) = search.starts.get(k) {
+            if k >= ATTACH {
+                search.starts.truncate(ATTACH);
+                break;
+            }
+            if meter.expired(&env.call) {
+                return Poll::Pending;
+            }
+            let start = search.start;
+            if sees(
+                rm,
+                env,
+                start,
+                node,
+                &mut search.starts,
+                &mut search.seen.0,
+                meter,
+            ) {
+                k = k.saturating_add(1);
+            }
+        }
+        if search.starts.is_empty() {
+            return Poll::NoPath;
+        }
+        search.restart(rm, s, meter);
+        search.ready = true;
+    }
+    loop {
+        while search.open > 0 {
+            if meter.expired(&env.call) {
+                return Poll::Pending;
+            }
+            let i = rd(s.heap, 0, 0);
+            if s.key(i) >= search.best.0 {
+                break;
+            }
+            // Pop the top.
+            search.open = search.open.saturating_sub(1);
+            let len = search.open;
+            s.swap(0, len);
+            wr(s.slot, usize::from(i), CLOSED);
+            s.sift(0, len);
+            let iu = usize::from(i);
+            let gi = s.dist(iu);
+            if let Some(&(_, d)) = search.ends.iter().find(|&&(e, _)| e == i)
+                && gi + d < search.best.0
+            {
+                search.best = (gi + d, i);
+            }
+            let Some(pi) = rm.node(iu) else { continue };
+            let mut work = 2u32;
+            for j in rm.neighbours(iu) {
+                work = work.saturating_add(1);
+                let Ok(ju) = u16::try_from(j) else { continue };
+                let sj = rd(s.slot, j, CLOSED);
+                if sj == CLOSED {
+                    continue;
+                }
+                // Only a shorter way counts: skip the square root when the squares tell.
+                let gj = s.dist(j);
+                if gj <= gi {
+                    continue;
+                }
+                let Some(pj) = rm.node(j) else { continue };
+                let d2 = pi.dist_sq(pj);
+                if gj.is_finite() && d2 >= (gj - gi) * (gj - gi) {
+                    continue;
+                }
+                let nd = gi + crate::geometry::sqrt(d2);
+                if nd < gj {
+                    wr(s.g, j, Point::new(nd, nd + h(pj)));
+                    wr(s.parent, j, i);
+                    if sj == 0 {
+                        let at = search.open;
+                        wr(s.heap, at, ju);
+                        wr(s.slot, j, slot_of(at));
+                        search.open = at.saturating_add(1);
+                        s.sift(at, search.open);
+                    } else {
+                        s.sift(usize::from(sj).saturating_sub(1), search.open);
+                    }
+                }
+            }
+            meter.charge(work);
+        }
+        let last = search.best.1;
+        if last == u16::MAX {
+            return Poll::NoPath;
+        }
+        // The way's first node (the root's candidate): up the parents (at most `n` steps).
+        let mut first = last;
+        for _ in 0..n {
+            let up = rd(s.parent, usize::from(first), u16::MAX);
+            if up == u16::MAX {
+                break;
+            }
+            first = up;
+        }
+        meter.charge(4);
+        // Its ends' segments, each candidate tested once.
+        if !sees(
+            rm,
+            env,
+            goal,
+            last,
+            &mut search.ends,
+            &mut search.seen.1,
+            meter,
+        ) {
+            search.rebest(s);
+        } else if !sees(
+            rm,
+            env,
+            search.start,
+            first,
+            &mut search.starts,
+            &mut search.seen.0,
+            meter,
+        ) {
+            if search.starts.is_empty() {
+                return Poll::NoPath;
+            }
+            search.restart(rm, s, meter);
+        } else {
+            break;
+        }
         if meter.expired(&env.call) {
             return Poll::Pending;
         }
-        let i = rd(s.heap, 0, 0);
-        if s.key(i) >= search.best.0 {
-            break;
-        }
-        // Pop the top.
-        search.open = search.open.saturating_sub(1);
-        let len = search.open;
-        s.swap(0, len);
-        wr(s.slot, usize::from(i), CLOSED);
-        s.sift(0, len);
-        let iu = usize::from(i);
-        let gi = s.dist(iu);
-        if let Some(&(_, d)) = search.ends.iter().find(|&&(e, _)| e == i)
-            && gi + d < search.best.0
-        {
-            search.best = (gi + d, i);
-        }
-        let Some(pi) = rm.node(iu) else { continue };
-        let mut work = 2u32;
-        for j in rm.neighbours(iu) {
-            work = work.saturating_add(1);
-            let Ok(ju) = u16::try_from(j) else { continue };
-            let sj = rd(s.slot, j, CLOSED);
-            if sj == CLOSED {
-                continue;
-            }
-            // Only a shorter way counts: skip the square root when the squares tell.
-            let gj = s.dist(j);
-            if gj <= gi {
-                continue;
-            }
-            let Some(pj) = rm.node(j) else { continue };
-            let d2 = pi.dist_sq(pj);
-            if gj.is_finite() && d2 >= (gj - gi) * (gj - gi) {
-                continue;
-            }
-            let nd = gi + crate::geometry::sqrt(d2);
-            if nd < gj {
-                wr(s.g, j, Point::new(nd, nd + h(pj)));
-                wr(s.parent, j, i);
-                if sj == 0 {
-                    let at = search.open;
-                    wr(s.heap, at, ju);
-                    wr(s.slot, j, slot_of(at));
-                    search.open = at.saturating_add(1);
-                    s.sift(at, search.open);
-                } else {
-                    s.sift(usize::from(sj).saturating_sub(1), search.open);
-                }
-            }
-        }
-        meter.charge(work);
     }
     search.open = 0;
-    if search.best.1 == u16::MAX {
-        return Poll::NoPath;
-    }
     // The chain of parents, written from the heap's last slot down (at most `n` nodes: each
-    // node has one parent, set when it was opened, and the attach nodes none).
+    // node has one parent, set when it was opened, and the root's candidates none).
     let end = s.heap.len();
     let mut at = search.best.1;
     let mut len = 0usize;

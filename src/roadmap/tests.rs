@@ -213,6 +213,74 @@ fn a_blocked_roadmap_path_is_dropped_and_the_trees_search() {
     panic!("the trees did not reach the goal");
 }
 
+/// A roadmap node the root or the goal does not see is dropped (the root's are tested before
+/// the search opens, the goal's once the way the search settles on ends there): here a disc
+/// hides the root's (the goal's) nearest node, a corner of the wall's end that gives the
+/// shortest way, and the search goes on with the next, a node above the root (the goal) that
+/// reaches the wall's end over an edge: the goal joins in the first call over that way, every
+/// segment of it free.
+#[test]
+fn a_node_an_end_does_not_see_is_dropped_and_the_search_goes_on() {
+    let bits = wall_bits();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let (a, b) = (Point::new(9.4, 16.6), Point::new(11.6, 16.6));
+    for root_side in [true, false] {
+        // The wall end's corners and a node C (no corner) above the root or the goal, in
+        // order of x, joined in a chain; a disc on the segment from that end to its corner
+        // (at y 10.5), clear of its segment to C.
+        let (c, nodes, corners, disc, want) = if root_side {
+            let c = Point::new(7.5, 17.5);
+            let want = START.dist(c) + c.dist(a) + a.dist(b) + b.dist(GOAL);
+            (c, [c, a, b], [NO_CORNER, 1, 0], Point::new(7.3, 10.5), want)
+        } else {
+            let c = Point::new(13.5, 17.5);
+            let want = START.dist(a) + a.dist(b) + b.dist(c) + c.dist(GOAL);
+            (
+                c,
+                [a, b, c],
+                [1, 0, NO_CORNER],
+                Point::new(13.7, 10.5),
+                want,
+            )
+        };
+        let mut buf = [0u8; 256];
+        let n = write(
+            &grid,
+            &nodes,
+            &corners,
+            &[0, 1, 3, 4],
+            &[1, 0, 2, 1],
+            &mut buf,
+        )
+        .unwrap();
+        let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+        let end = if root_side { START } else { GOAL };
+        let corner = if root_side { a } else { b };
+        for bidirectional in [false, true] {
+            let case = (root_side, bidirectional);
+            let mut storage = Storage::<64, 16>::new();
+            let mut cfg = Config::default().for_grid(&grid);
+            cfg.bidirectional = bidirectional;
+            cfg.budget.max_expansions = 1;
+            let mut p = planner_on(&mut storage, Map::new(grid), cfg);
+            p.set_roadmap(Some(rm)).unwrap();
+            p.add_obstacle(Circle::new(disc, 0.5)).unwrap();
+            assert!(!p.map().free_path(end, corner) && p.map().free_path(end, c));
+            p.set_goal(GOAL).unwrap();
+            let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+            let progress = p.plan(&clock, START).unwrap();
+            assert!(progress.goal_in_tree && p.stats().roadmap, "{case:?}");
+            let first = p.stats().first_cost.unwrap();
+            assert!((first - want).abs() < 1e-3, "{case:?}: {first} vs {want}");
+            let mut path = [Point::ZERO; 16];
+            let info = p.path(&mut path).unwrap();
+            for w in path[..info.len].windows(2) {
+                assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
+            }
+        }
+    }
+}
+
 /// A roadmap of another map, or one with more nodes than the reverse arena has free slots,
 /// is refused with its reason; the paper's configuration (tactic off) ignores a roadmap.
 #[test]
