@@ -460,9 +460,11 @@ fn attach<C: Clock + ?Sized>(rm: &Roadmap<'_>, p: Point, meter: &Meter<'_, C>) -
         }
     }
     meter.charge((visited >> 2).saturating_add(4));
-    near.iter()
-        .map(|&(d2, i)| (i, crate::geometry::sqrt(d2)))
-        .collect()
+    let mut out = Candidates::new();
+    for &(d2, i) in &near {
+        let _ = out.push((i, crate::geometry::sqrt(d2)));
+    }
+    out
 }
 
 /// Where a roadmap search stands between two planner calls (the planner keeps it; the search's
@@ -644,7 +646,7 @@ fn sees<M: Metric, C: Clock + ?Sized, const K: usize>(
         // Dropping candidate `k` moves the later ones down a place: so do their bits.
         let low = bit.wrapping_sub(1);
         *seen = (*seen & low) | ((*seen >> 1) & !low);
-        list.remove(k);
+        list.retain(|&(i, _)| i != node);
     }
     free
 }
