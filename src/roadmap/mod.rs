@@ -11,7 +11,7 @@
 //!
 //! When a goal is set, the planner's first step (the `roadmap` tactic, [`crate::Tactics`])
 //! joins the goal over the straight segment when it is free, else searches the roadmap once
-//! ([`open`], [`resume`]): the root and the goal each attach to their nearest nodes (tangent
+//! (`open`, `resume`): the root and the goal each attach to their nearest nodes (tangent
 //! at the node; the root's tested first, the goal's only once a way the search settles on
 //! ends there: a node the goal does not see is dropped and the search goes on without it), a
 //! weighted A* joins them, every edge of the path found is tested free as any tree edge is (the dynamic obstacles, live cells and the robot's body count),
@@ -19,7 +19,7 @@
 //! Algorithm 1's meet and graft). From there the planner goes on as ever: rewiring shortens
 //! the path. When the roadmap has no path or an edge is blocked, nothing is kept and the trees
 //! search as they would have. A call that ends first leaves the search where it stands
-//! ([`Stage`]) and the next call takes it up before any tree step, so a caller's short calls
+//! (`Stage`) and the next call takes it up before any tree step, so a caller's short calls
 //! still get the roadmap's path (the path's ends are then tested again: the root or an
 //! obstacle may have moved). The search needs no memory of its own: the reverse arena's last
 //! free slots are its scratch (`Tree::spare`), kept from call to call while the trees wait,
