@@ -117,6 +117,21 @@ fn planner_on<'s, 'm>(
     Planner::new(storage, map, Euclidean, rng, cfg, START).unwrap()
 }
 
+/// A default planner on `grid` (one tree or two), one expansion a call, `rm` attached.
+fn one_step_planner<'s, 'm>(
+    storage: &'s mut Storage<64, 16>,
+    grid: OccupancyGrid<'m>,
+    rm: Roadmap<'m>,
+    bidirectional: bool,
+) -> Planner<'s, 'm, Euclidean, rand_xorshift::XorShiftRng, 64, 16, 2> {
+    let mut cfg = Config::default().for_grid(&grid);
+    cfg.bidirectional = bidirectional;
+    cfg.budget.max_expansions = 1;
+    let mut p = planner_on(storage, Map::new(grid), cfg);
+    p.set_roadmap(Some(rm)).unwrap();
+    p
+}
+
 /// With the roadmap, the goal joins in the first call over the roadmap's path (start, both
 /// corner nodes, goal), before any expansion could; every edge of the path is free; the agent
 /// then drives it to the goal.
@@ -129,11 +144,7 @@ fn the_goal_joins_over_the_roadmap_in_the_first_call() {
     let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
     for bidirectional in [true, false] {
         let mut storage = Storage::<64, 16>::new();
-        let mut cfg = Config::default().for_grid(&grid);
-        cfg.bidirectional = bidirectional;
-        cfg.budget.max_expansions = 1;
-        let mut p = planner_on(&mut storage, Map::new(grid), cfg);
-        p.set_roadmap(Some(rm)).unwrap();
+        let mut p = one_step_planner(&mut storage, grid, rm, bidirectional);
         p.set_goal(GOAL).unwrap();
         let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
         let progress = p.plan(&clock, START).unwrap();
@@ -259,11 +270,7 @@ fn a_node_an_end_does_not_see_is_dropped_and_the_search_goes_on() {
         for bidirectional in [false, true] {
             let case = (root_side, bidirectional);
             let mut storage = Storage::<64, 16>::new();
-            let mut cfg = Config::default().for_grid(&grid);
-            cfg.bidirectional = bidirectional;
-            cfg.budget.max_expansions = 1;
-            let mut p = planner_on(&mut storage, Map::new(grid), cfg);
-            p.set_roadmap(Some(rm)).unwrap();
+            let mut p = one_step_planner(&mut storage, grid, rm, bidirectional);
             p.add_obstacle(Circle::new(disc, 0.5)).unwrap();
             assert!(!p.map().free_path(end, corner) && p.map().free_path(end, c));
             p.set_goal(GOAL).unwrap();
@@ -395,6 +402,28 @@ fn comb<'s, 'm, const N: usize>(
     p
 }
 
+/// Runs `f` on the comb's grid and roadmap, with the roadmap's ends and its way's length.
+fn on_comb(f: impl FnOnce(OccupancyGrid<'_>, Roadmap<'_>, (Point, Point), f32)) {
+    let bits = comb_bits();
+    let grid = OccupancyGrid::new(&bits, COMB_COLS, COMB_ROWS, 1.0).unwrap();
+    let mut buf = [0u8; 4096];
+    let (len, ends, want) = comb_roadmap(&grid, &mut buf);
+    f(grid, Roadmap::from_bytes(&buf[..len]).unwrap(), ends, want);
+}
+
+/// Every segment of the planner's path is free.
+fn assert_path_free<const N: usize>(
+    p: &Planner<'_, '_, Euclidean, rand_xorshift::XorShiftRng, N, 16, 2>,
+) -> usize {
+    let mut path = [Point::ZERO; 512];
+    let info = p.path(&mut path).unwrap();
+    assert!(info.to_goal);
+    for w in path[..info.len].windows(2) {
+        assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
+    }
+    info.len
+}
+
 /// Found on a MovingAI maze of 8-cell corridors (issue 42): its legs' roadmap paths have 164-201
 /// nodes and the search kept at most 128, so the roadmap never joined there and its search
 /// was wasted. The path now stays in the arena's last free slots, whatever its length. On the
@@ -403,34 +432,27 @@ fn comb<'s, 'm, const N: usize>(
 /// the arena, so the path is dropped and the trees search.
 #[test]
 fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
-    let bits = comb_bits();
-    let grid = OccupancyGrid::new(&bits, COMB_COLS, COMB_ROWS, 1.0).unwrap();
-    let mut buf = [0u8; 4096];
-    let (len, ends, want) = comb_roadmap(&grid, &mut buf);
-    let rm = Roadmap::from_bytes(&buf[..len]).unwrap();
-    let mut cfg = Config::default().for_grid(&grid);
-    cfg.bidirectional = false;
-    cfg.budget.max_expansions = 1;
-    let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
-    // 512 slots: the 140-node branch joins in the first call, its cost the roadmap path's.
-    let mut storage = Storage::<512, 16>::new();
-    let mut p = comb(&mut storage, grid, rm, cfg, ends);
-    let progress = p.plan(&clock, ends.0).unwrap();
-    assert!(progress.goal_in_tree && p.stats().roadmap);
-    let first_cost = p.stats().first_cost.unwrap();
-    assert!((first_cost - want).abs() < 1e-2, "{first_cost} vs {want}");
-    let mut path = [Point::ZERO; 512];
-    let info = p.path(&mut path).unwrap();
-    assert!(info.to_goal && info.len > 128, "{} nodes", info.len);
-    for w in path[..info.len].windows(2) {
-        assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
-    }
-    // 256 slots: 1 + 2 x 140 > 256, the path is dropped; the arena is left empty.
-    let mut storage = Storage::<256, 16>::new();
-    let mut p = comb(&mut storage, grid, rm, cfg, ends);
-    p.plan(&clock, ends.0).unwrap();
-    assert!(!p.stats().roadmap);
-    assert_eq!(p.reverse_tree().len(), 0);
+    on_comb(|grid, rm, ends, want| {
+        let mut cfg = Config::default().for_grid(&grid);
+        cfg.bidirectional = false;
+        cfg.budget.max_expansions = 1;
+        let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+        // 512 slots: the 140-node branch joins in the first call, its cost the roadmap path's.
+        let mut storage = Storage::<512, 16>::new();
+        let mut p = comb(&mut storage, grid, rm, cfg, ends);
+        let progress = p.plan(&clock, ends.0).unwrap();
+        assert!(progress.goal_in_tree && p.stats().roadmap);
+        let first_cost = p.stats().first_cost.unwrap();
+        assert!((first_cost - want).abs() < 1e-2, "{first_cost} vs {want}");
+        let nodes = assert_path_free(&p);
+        assert!(nodes > 128, "{nodes} nodes");
+        // 256 slots: 1 + 2 x 140 > 256, the path is dropped; the arena is left empty.
+        let mut storage = Storage::<256, 16>::new();
+        let mut p = comb(&mut storage, grid, rm, cfg, ends);
+        p.plan(&clock, ends.0).unwrap();
+        assert!(!p.stats().roadmap);
+        assert_eq!(p.reverse_tree().len(), 0);
+    });
 }
 
 /// Found on the MovingAI maze with calls of 50 us (issue 42): the roadmap's search ran only in
@@ -443,51 +465,43 @@ fn regression_a_roadmap_path_longer_than_128_nodes_joins() {
 /// the path is free.
 #[test]
 fn regression_a_call_shorter_than_the_roadmap_search_keeps_it() {
-    let bits = comb_bits();
-    let grid = OccupancyGrid::new(&bits, COMB_COLS, COMB_ROWS, 1.0).unwrap();
-    let mut buf = [0u8; 4096];
-    let (len, ends, want) = comb_roadmap(&grid, &mut buf);
-    let rm = Roadmap::from_bytes(&buf[..len]).unwrap();
-    for bidirectional in [false, true] {
-        for frozen in [false, true] {
-            let mut cfg = Config::default().for_grid(&grid);
-            cfg.bidirectional = bidirectional;
-            let clock = if frozen {
-                cfg.budget.max_work = 300;
-                FakeClock::nanos()
-            } else {
-                cfg.budget.t_exp = core::time::Duration::from_micros(2);
-                FakeClock::nanos().with_work_cost(10).with_step(1)
-            };
-            let case = (bidirectional, frozen);
-            let mut storage = Storage::<512, 16>::new();
-            let mut p = comb(&mut storage, grid, rm, cfg, ends);
-            let mut calls = 0;
-            while calls < 100 {
-                calls += 1;
-                let progress = p.plan(&clock, ends.0).unwrap();
-                if progress.goal_in_tree {
-                    break;
+    on_comb(|grid, rm, ends, want| {
+        for bidirectional in [false, true] {
+            for frozen in [false, true] {
+                let mut cfg = Config::default().for_grid(&grid);
+                cfg.bidirectional = bidirectional;
+                let clock = if frozen {
+                    cfg.budget.max_work = 300;
+                    FakeClock::nanos()
+                } else {
+                    cfg.budget.t_exp = core::time::Duration::from_micros(2);
+                    FakeClock::nanos().with_work_cost(10).with_step(1)
+                };
+                let case = (bidirectional, frozen);
+                let mut storage = Storage::<512, 16>::new();
+                let mut p = comb(&mut storage, grid, rm, cfg, ends);
+                let mut calls = 0;
+                while calls < 100 {
+                    calls += 1;
+                    let progress = p.plan(&clock, ends.0).unwrap();
+                    if progress.goal_in_tree {
+                        break;
+                    }
+                    assert_eq!(
+                        p.stats().expansions,
+                        0,
+                        "{case:?}: the trees wait (call {calls})"
+                    );
                 }
-                assert_eq!(
-                    p.stats().expansions,
-                    0,
-                    "{case:?}: the trees wait (call {calls})"
+                assert!(calls > 2, "{case:?}: the search fits one call ({calls})");
+                assert!(p.stats().roadmap, "{case:?}: joined without the roadmap");
+                let first_cost = p.stats().first_cost.unwrap();
+                assert!(
+                    (first_cost - want).abs() < 1e-2,
+                    "{case:?}: {first_cost} vs {want}"
                 );
-            }
-            assert!(calls > 2, "{case:?}: the search fits one call ({calls})");
-            assert!(p.stats().roadmap, "{case:?}: joined without the roadmap");
-            let first_cost = p.stats().first_cost.unwrap();
-            assert!(
-                (first_cost - want).abs() < 1e-2,
-                "{case:?}: {first_cost} vs {want}"
-            );
-            let mut path = [Point::ZERO; 512];
-            let info = p.path(&mut path).unwrap();
-            assert!(info.to_goal, "{case:?}");
-            for w in path[..info.len].windows(2) {
-                assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
+                assert_path_free(&p);
             }
         }
-    }
+    });
 }
