@@ -563,8 +563,8 @@ pub(crate) fn open<C: Clock + ?Sized>(
 }
 
 impl Search {
-    /// Empties the scratch and opens the root's candidates.
-    fn restart<C: Clock + ?Sized>(
+    /// Empties the scratch and opens the root's candidates (each a distinct node).
+    fn open_starts<C: Clock + ?Sized>(
         &mut self,
         rm: &Roadmap<'_>,
         s: &mut Scratch<'_>,
@@ -583,21 +583,12 @@ impl Search {
         for &(i, d) in &self.starts {
             let iu = usize::from(i);
             let Some(p) = rm.node(iu) else { continue };
-            if d >= s.dist(iu) {
-                continue;
-            }
             wr(s.g, iu, Point::new(d, d + h(p)));
             wr(s.parent, iu, u16::MAX);
-            let at = match rd(s.slot, iu, 0) {
-                0 => {
-                    let at = self.open;
-                    wr(s.heap, at, i);
-                    wr(s.slot, iu, slot_of(at));
-                    self.open = at.saturating_add(1);
-                    at
-                }
-                k => usize::from(k).saturating_sub(1),
-            };
+            let at = self.open;
+            wr(s.heap, at, i);
+            wr(s.slot, iu, slot_of(at));
+            self.open = at.saturating_add(1);
             s.sift(at, self.open);
         }
     }
@@ -662,7 +653,7 @@ fn sees<M: Metric, C: Clock + ?Sized, const K: usize>(
 /// consecutive pair an edge of the roadmap, the first seen from the goal and the last from the
 /// root over free segments (the edges between them are not tested here). A path of any length
 /// fits: the heap is no longer needed and has a slot per roadmap node. Bounded: each node is
-/// closed once per start, and the search stops at the call's deadline.
+/// closed once, and the search stops at the call's deadline.
 #[inline(never)]
 pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
     rm: &Roadmap<'_>,
@@ -705,7 +696,7 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
         if search.starts.is_empty() {
             return Poll::NoPath;
         }
-        search.restart(rm, s, meter);
+        search.open_starts(rm, s, meter);
         search.ready = true;
     }
     loop {
@@ -770,18 +761,9 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
         if last == u16::MAX {
             return Poll::NoPath;
         }
-        // The way's first node (the root's candidate): up the parents (at most `n` steps).
-        let mut first = last;
-        for _ in 0..n {
-            let up = rd(s.parent, usize::from(first), u16::MAX);
-            if up == u16::MAX {
-                break;
-            }
-            first = up;
-        }
-        meter.charge(4);
-        // Its ends' segments, each candidate tested once.
-        if !sees(
+        // The goal's segment to the way's last node, each candidate tested once (the root's
+        // were tested before the search opened).
+        if sees(
             rm,
             env,
             goal,
@@ -790,23 +772,9 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
             &mut search.seen.1,
             meter,
         ) {
-            search.rebest(s);
-        } else if !sees(
-            rm,
-            env,
-            search.start,
-            first,
-            &mut search.starts,
-            &mut search.seen.0,
-            meter,
-        ) {
-            if search.starts.is_empty() {
-                return Poll::NoPath;
-            }
-            search.restart(rm, s, meter);
-        } else {
             break;
         }
+        search.rebest(s);
         if meter.expired(&env.call) {
             return Poll::Pending;
         }
