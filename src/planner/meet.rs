@@ -76,7 +76,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         let carried = matches!(stage, Stage::Open(_) | Stage::Found { .. });
         let mut stage = stage;
         // Open, run and end the search (each arm moves on or returns).
-        let (len, mut tested, resumed) = loop {
+        let (len, mut tested) = loop {
             let scratch = self
                 .rev
                 .tree
@@ -92,11 +92,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                 Stage::Due => {
                     // The straight segment first: when free, it is the path (no search).
                     if env.free(root, goal.pos, meter) {
-                        Stage::Found {
-                            len: 0,
-                            tested: 0,
-                            resumed: false,
-                        }
+                        Stage::Found { len: 0, tested: 0 }
                     } else if meter.expired(&call) {
                         self.roadmap_stage = Stage::Blocked;
                         return None;
@@ -122,19 +118,11 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
                             self.roadmap_stage = Stage::Open(search);
                             return None;
                         }
-                        Poll::Found(len) => Stage::Found {
-                            len,
-                            tested: 0,
-                            resumed: carried,
-                        },
+                        Poll::Found(len) => Stage::Found { len, tested: 0 },
                         Poll::NoPath => return Some(false),
                     }
                 }
-                Stage::Found {
-                    len,
-                    tested,
-                    resumed,
-                } => break (len, tested, resumed || carried),
+                Stage::Found { len, tested } => break (len, tested),
             };
         };
         // The branch fills the arena's first free slots while its nodes are read from the
@@ -161,7 +149,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
         };
         // Segment `k` joins nodes `k - 1` and `k`. The ends (segments 0 and `len`) were tested
-        // when the search settled on its way, in this call unless `resumed`. The roadmap's own
+        // when the search settled on its way, in this call unless `carried`. The roadmap's own
         // edges are tested here, against everything the map holds now. They are free of the
         // grid it was baked for (`fits` checked its cells): for a point robot on a map whose
         // live cells mark nothing, only the dynamic obstacles are left to test.
@@ -170,7 +158,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
         while tested <= len {
             let k = tested;
             let end = k == 0 || k == len;
-            if resumed || !end {
+            if carried || !end {
                 let a = if k == 0 {
                     goal.pos
                 } else {
@@ -189,11 +177,7 @@ impl<'s, 'm, M: Metric, R: Rng, const N: usize, const B: usize, const K: usize>
             }
             tested = tested.saturating_add(1);
             if tested <= len && meter.expired(&call) {
-                self.roadmap_stage = Stage::Found {
-                    len,
-                    tested,
-                    resumed,
-                };
+                self.roadmap_stage = Stage::Found { len, tested };
                 return None;
             }
         }

@@ -14,11 +14,12 @@
 //! (`open`, `resume`): the root and the goal each attach to their nearest nodes (tangent
 //! at the node; the root's tested first, the goal's only once a way the search settles on
 //! ends there: a node the goal does not see is dropped and the search goes on without it), a
-//! weighted A* joins them, every edge of the path found is tested free as any tree edge is (the dynamic obstacles, live cells and the robot's body count),
-//! and the path becomes a branch of the reverse tree that meets the forward tree's root (paper
-//! Algorithm 1's meet and graft). From there the planner goes on as ever: rewiring shortens
-//! the path. When the roadmap has no path or an edge is blocked, nothing is kept and the trees
-//! search as they would have. A call that ends first leaves the search where it stands
+//! weighted A* joins them, every edge of the path found is tested free as any tree edge is
+//! (the dynamic obstacles, live cells and the robot's body count), and the path becomes a
+//! branch of the reverse tree that meets the forward tree's root (paper Algorithm 1's meet
+//! and graft). From there the planner goes on as ever: rewiring shortens the path. When the
+//! roadmap has no path or an edge is blocked, nothing is kept and the trees search as they
+//! would have. A call that ends first leaves the search where it stands
 //! (`Stage`) and the next call takes it up before any tree step, so a caller's short calls
 //! still get the roadmap's path (the path's ends are then tested again: the root or an
 //! obstacle may have moved). The search needs no memory of its own: the reverse arena's last
@@ -398,8 +399,8 @@ fn slot_of(k: usize) -> u16 {
 }
 
 /// An end's candidates: the nearest nodes tangent at the node, nearest first, with their
-/// distances (their segments to the end not tested yet).
-type Candidates = heapless::Vec<(u16, f32), ATTACH_CANDIDATES>;
+/// distances and whether the end was seen to see them (their segments tested free).
+type Candidates = heapless::Vec<(u16, f32, bool), ATTACH_CANDIDATES>;
 
 /// The [`ATTACH_CANDIDATES`] nodes of `rm` nearest `p` whose segment from `p` is tangent at
 /// the node, nearest first, with their distances; whether `p` sees them is tested later, and
@@ -462,7 +463,7 @@ fn attach<C: Clock + ?Sized>(rm: &Roadmap<'_>, p: Point, meter: &Meter<'_, C>) -
     meter.charge((visited >> 2).saturating_add(4));
     let mut out = Candidates::new();
     for &(d2, i) in &near {
-        let _ = out.push((i, crate::geometry::sqrt(d2)));
+        let _ = out.push((i, crate::geometry::sqrt(d2), false));
     }
     out
 }
@@ -485,13 +486,9 @@ pub(crate) enum Stage {
     /// A path of `len` nodes waits at the arena's end (`len` 0: the straight segment); its
     /// segments before `tested` were found free (counted from the goal's end, segment `k`
     /// joining path nodes `k - 1` and `k`, the goal and the root standing for nodes -1 and
-    /// `len`). `resumed`: the path was found in an earlier call than the ends were tested
-    /// in, so they are tested again (the root may have moved, an obstacle too).
-    Found {
-        len: usize,
-        tested: usize,
-        resumed: bool,
-    },
+    /// `len`). A call that takes it up tests its two ends again (the root may have moved,
+    /// an obstacle too).
+    Found { len: usize, tested: usize },
 }
 
 /// An open weighted A* ([`WEIGHT`]) over the roadmap ([`open`], [`resume`]): what is not
@@ -504,8 +501,6 @@ pub(crate) struct Search {
     /// end is found blocked is dropped.
     starts: Candidates,
     ends: Candidates,
-    /// Bit `i` set: candidate `i` of `starts` (`ends`) was seen from its end.
-    seen: (u8, u8),
     /// The root's candidates were tested and the open set holds those it sees.
     ready: bool,
     /// The open set's size (its heap is `Scratch::heap`'s first entries).
@@ -555,7 +550,6 @@ pub(crate) fn open<C: Clock + ?Sized>(
         goal,
         starts,
         ends,
-        seen: (0, 0),
         ready: false,
         open: 0,
         best: (f32::INFINITY, u16::MAX),
@@ -580,7 +574,7 @@ impl Search {
         let h = |p: Point| WEIGHT * p.dist(goal);
         self.open = 0;
         self.best = (f32::INFINITY, u16::MAX);
-        for &(i, d) in &self.starts {
+        for &(i, d, _) in &self.starts {
             let iu = usize::from(i);
             let Some(p) = rm.node(iu) else { continue };
             wr(s.g, iu, Point::new(d, d + h(p)));
@@ -596,7 +590,7 @@ impl Search {
     /// The best way over the goal's candidates whose node is closed (its distance final).
     fn rebest(&mut self, s: &Scratch<'_>) {
         self.best = (f32::INFINITY, u16::MAX);
-        for &(e, d) in &self.ends {
+        for &(e, d, _) in &self.ends {
             if rd(s.slot, usize::from(e), 0) == CLOSED {
                 let via = s.dist(usize::from(e)) + d;
                 if via < self.best.0 {
@@ -607,37 +601,28 @@ impl Search {
     }
 }
 
-/// Tests the segment from end `p` to its candidate `node` unless it was seen before (`seen`,
-/// bit `k` for candidate `k` of `list`); a blocked candidate is dropped from `list`. Returns
-/// whether it is free.
+/// Tests the segment from end `p` to its candidate `node` unless it was seen before; a
+/// blocked candidate is dropped from `list`. Returns whether it is free.
 fn sees<M: Metric, C: Clock + ?Sized, const K: usize>(
     rm: &Roadmap<'_>,
     env: &Env<'_, '_, M, K>,
     p: Point,
     node: u16,
     list: &mut Candidates,
-    seen: &mut u8,
     meter: &Meter<'_, C>,
 ) -> bool {
-    let Some(k) = list.iter().position(|&(i, _)| i == node) else {
+    let Some(c) = list.iter_mut().find(|c| c.0 == node) else {
         return false;
     };
-    let bit = 1u8
-        .checked_shl(u32::try_from(k).unwrap_or(u32::MAX))
-        .unwrap_or(0);
-    if *seen & bit != 0 {
+    if c.2 {
         return true;
     }
-    let free = rm
+    c.2 = rm
         .node(usize::from(node))
         .is_some_and(|n| env.free(p, n, meter));
-    if free {
-        *seen |= bit;
-    } else {
-        // Dropping candidate `k` moves the later ones down a place: so do their bits.
-        let low = bit.wrapping_sub(1);
-        *seen = (*seen & low) | ((*seen >> 1) & !low);
-        list.retain(|&(i, _)| i != node);
+    let free = c.2;
+    if !free {
+        list.retain(|c| c.0 != node);
     }
     free
 }
@@ -672,7 +657,7 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
         // The root's candidates, nearest first, each tested once, until [`ATTACH`] are seen:
         // a root's node found blocked later would cost the search a new start.
         let mut k = 0usize;
-        while let Some(&(node, _)) = search.starts.get(k) {
+        while let Some(&(node, _, _)) = search.starts.get(k) {
             if k >= ATTACH {
                 search.starts.truncate(ATTACH);
                 break;
@@ -681,15 +666,7 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
                 return Poll::Pending;
             }
             let start = search.start;
-            if sees(
-                rm,
-                env,
-                start,
-                node,
-                &mut search.starts,
-                &mut search.seen.0,
-                meter,
-            ) {
+            if sees(rm, env, start, node, &mut search.starts, meter) {
                 k = k.saturating_add(1);
             }
         }
@@ -716,7 +693,7 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
             s.sift(0, len);
             let iu = usize::from(i);
             let gi = s.dist(iu);
-            if let Some(&(_, d)) = search.ends.iter().find(|&&(e, _)| e == i)
+            if let Some(&(_, d, _)) = search.ends.iter().find(|c| c.0 == i)
                 && gi + d < search.best.0
             {
                 search.best = (gi + d, i);
@@ -763,15 +740,7 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
         }
         // The goal's segment to the way's last node, each candidate tested once (the root's
         // were tested before the search opened).
-        if sees(
-            rm,
-            env,
-            goal,
-            last,
-            &mut search.ends,
-            &mut search.seen.1,
-            meter,
-        ) {
+        if sees(rm, env, goal, last, &mut search.ends, meter) {
             break;
         }
         search.rebest(s);

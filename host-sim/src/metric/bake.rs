@@ -715,7 +715,7 @@ pub fn export_command(
     } else {
         println!("  flash data {data} of {flash_data} bytes: fits the firmware example");
     }
-    // The roadmap's code in the firmware example (the core's `roadmap` feature): 8,536 bytes
+    // The roadmap's code in the firmware example (the core's `roadmap` feature): 8,184 bytes
     // of flash measured on the office export (docs/guides/firmware.md), rounded up.
     const ROADMAP_CODE_BYTES: usize = 9 * 1024;
     let with_roadmap = data + ex.roadmap_bytes + ROADMAP_CODE_BYTES;
