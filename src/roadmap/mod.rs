@@ -13,7 +13,9 @@
 //! joins the goal over the straight segment when it is free, else searches the roadmap once
 //! (`open`, `resume`): the root and the goal each attach to their nearest nodes (tangent
 //! at the node; the root's tested first, the goal's only once a way the search settles on
-//! ends there: a node the goal does not see is dropped and the search goes on without it), a
+//! ends there: a node the goal does not see is dropped and the search goes on without it; an
+//! end that sees none of its nearest nodes, or whose nodes the search cannot reach, takes the
+//! next nearest, as in a maze whose nearest corners lie behind the walls), a
 //! weighted A* joins them, every edge of the path found is tested free as any tree edge is
 //! (the dynamic obstacles, live cells and the robot's body count), and the path becomes a
 //! branch of the reverse tree that meets the forward tree's root (paper Algorithm 1's meet
@@ -67,6 +69,10 @@ const ATTACH_CANDIDATES: usize = 8;
 /// Nodes the root attaches to, at most: the first of its candidates it sees (each tested
 /// before the search opens). The goal's candidates are tested only when a way uses them.
 const ATTACH: usize = 6;
+/// Times an end's candidates are taken again, the next [`ATTACH_CANDIDATES`] nearest, when it
+/// sees none of those it had (an end beside a wall, in a maze whose nearest corners are
+/// behind the walls): up to `ATTACH_CANDIDATES * (1 + WIDEN)` nodes an end.
+const WIDEN: u8 = 3;
 /// The A* heuristic's weight: the straight distance to the goal counts twice, so the search
 /// pops far fewer nodes on a dense roadmap (a map of many small obstacles has 20-40 edges a
 /// node) for a first path at most twice the roadmap's shortest (rewiring shortens it from the
@@ -402,13 +408,27 @@ fn slot_of(k: usize) -> u16 {
 /// distances and whether the end was seen to see them (their segments tested free).
 type Candidates = heapless::Vec<(u16, f32, bool), ATTACH_CANDIDATES>;
 
+/// An end's candidates so far: the farthest taken (its squared distance and id: the next
+/// ones are beyond it), and how many times they were taken again ([`WIDEN`]).
+#[derive(Clone, Copy, Debug)]
+struct Reach {
+    beyond: (f32, u16),
+    widened: u8,
+}
+
 /// The [`ATTACH_CANDIDATES`] nodes of `rm` nearest `p` whose segment from `p` is tangent at
-/// the node, nearest first, with their distances; whether `p` sees them is tested later, and
-/// only for the nodes a path found uses ([`resume`]). The nodes come in order of `x`: the scan
-/// starts at `p.x` and widens both ways until a column of nodes is farther in `x` alone than
-/// the farthest candidate kept.
+/// the node and that lie beyond `reach` (farther, or as far with a higher id), nearest first,
+/// with their distances; whether `p` sees them is tested later ([`resume`]). `reach` becomes
+/// the farthest of them. The nodes come in order of `x`: the scan starts at `p.x` and widens
+/// both ways until a column of nodes is farther in `x` alone than the farthest candidate kept.
 #[inline(never)]
-fn attach<C: Clock + ?Sized>(rm: &Roadmap<'_>, p: Point, meter: &Meter<'_, C>) -> Candidates {
+fn attach<C: Clock + ?Sized>(
+    rm: &Roadmap<'_>,
+    p: Point,
+    reach: &mut Reach,
+    meter: &Meter<'_, C>,
+) -> Candidates {
+    let beyond = reach.beyond;
     let mut near: heapless::Vec<(f32, u16), ATTACH_CANDIDATES> = heapless::Vec::new();
     let x = |i: usize| rm.node(i).map_or(f32::INFINITY, |n| n.x);
     // The first node with x >= p.x.
@@ -449,7 +469,8 @@ fn attach<C: Clock + ?Sized>(rm: &Roadmap<'_>, p: Point, meter: &Meter<'_, C>) -
         visited = visited.saturating_add(1);
         let Some(n) = rm.node(i) else { continue };
         let d2 = n.dist_sq(p);
-        if d2 > worst || !rm.tangent(i, p) {
+        let id = u16::try_from(i).unwrap_or(u16::MAX);
+        if d2 > worst || (d2, id) <= beyond || !rm.tangent(i, p) {
             continue;
         }
         let at = near.partition_point(|&(d, _)| d <= d2);
@@ -457,15 +478,33 @@ fn attach<C: Clock + ?Sized>(rm: &Roadmap<'_>, p: Point, meter: &Meter<'_, C>) -
             if near.is_full() {
                 near.pop();
             }
-            let _ = near.insert(at, (d2, u16::try_from(i).unwrap_or(u16::MAX)));
+            let _ = near.insert(at, (d2, id));
         }
     }
     meter.charge((visited >> 2).saturating_add(4));
     let mut out = Candidates::new();
     for &(d2, i) in &near {
         let _ = out.push((i, crate::geometry::sqrt(d2), false));
+        reach.beyond = (d2, i);
     }
     out
+}
+
+/// Takes `list` again, the next nodes beyond `reach`, when it is empty and [`WIDEN`] allows:
+/// whether it did.
+fn widen<C: Clock + ?Sized>(
+    rm: &Roadmap<'_>,
+    p: Point,
+    list: &mut Candidates,
+    reach: &mut Reach,
+    meter: &Meter<'_, C>,
+) -> bool {
+    if !list.is_empty() || reach.widened >= WIDEN {
+        return false;
+    }
+    reach.widened = reach.widened.saturating_add(1);
+    *list = attach(rm, p, reach, meter);
+    !list.is_empty()
 }
 
 /// Where a roadmap search stands between two planner calls (the planner keeps it; the search's
@@ -501,6 +540,8 @@ pub(crate) struct Search {
     /// end is found blocked is dropped.
     starts: Candidates,
     ends: Candidates,
+    /// How far each end's candidates reach, for [`widen`].
+    reach: (Reach, Reach),
     /// The root's candidates were tested and the open set holds those it sees.
     ready: bool,
     /// The open set's size (its heap is `Scratch::heap`'s first entries).
@@ -540,8 +581,13 @@ pub(crate) fn open<C: Clock + ?Sized>(
     if !fits(rm, s) {
         return None;
     }
-    let ends = attach(rm, goal, meter);
-    let starts = attach(rm, start, meter);
+    let new = Reach {
+        beyond: (-1.0, 0),
+        widened: 0,
+    };
+    let mut reach = (new, new);
+    let ends = attach(rm, goal, &mut reach.1, meter);
+    let starts = attach(rm, start, &mut reach.0, meter);
     if ends.is_empty() || starts.is_empty() {
         return None;
     }
@@ -550,6 +596,7 @@ pub(crate) fn open<C: Clock + ?Sized>(
         goal,
         starts,
         ends,
+        reach,
         ready: false,
         open: 0,
         best: (f32::INFINITY, u16::MAX),
@@ -656,8 +703,16 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
     if !search.ready {
         // The root's candidates, nearest first, each tested once, until [`ATTACH`] are seen:
         // a root's node found blocked later would cost the search a new start.
+        // When it sees none, the next nearest are taken ([`widen`]).
+        let start = search.start;
         let mut k = 0usize;
-        while let Some(&(node, _, _)) = search.starts.get(k) {
+        loop {
+            let Some(&(node, _, _)) = search.starts.get(k) else {
+                if widen(rm, start, &mut search.starts, &mut search.reach.0, meter) {
+                    continue;
+                }
+                break;
+            };
             if k >= ATTACH {
                 search.starts.truncate(ATTACH);
                 break;
@@ -665,7 +720,6 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
             if meter.expired(&env.call) {
                 return Poll::Pending;
             }
-            let start = search.start;
             if sees(rm, env, start, node, &mut search.starts, meter) {
                 k = k.saturating_add(1);
             }
@@ -736,6 +790,13 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
         }
         let last = search.best.1;
         if last == u16::MAX {
+            // Every node the root reaches is closed and none is a goal's candidate (they lie
+            // in another part of the roadmap, behind a wall): the next nearest ([`widen`]).
+            search.ends.clear();
+            if widen(rm, goal, &mut search.ends, &mut search.reach.1, meter) {
+                search.rebest(s);
+                continue;
+            }
             return Poll::NoPath;
         }
         // The goal's segment to the way's last node, each candidate tested once (the root's
@@ -743,6 +804,9 @@ pub(crate) fn resume<M: Metric, C: Clock + ?Sized, const K: usize>(
         if sees(rm, env, goal, last, &mut search.ends, meter) {
             break;
         }
+        // The goal sees none of its candidates: the next nearest ([`widen`]); those the
+        // search has closed count at once.
+        widen(rm, goal, &mut search.ends, &mut search.reach.1, meter);
         search.rebest(s);
         if meter.expired(&env.call) {
             return Poll::Pending;

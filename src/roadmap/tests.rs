@@ -288,6 +288,118 @@ fn a_node_an_end_does_not_see_is_dropped_and_the_search_goes_on() {
     }
 }
 
+/// Found on MovingAI's maze of 8-cell corridors with a 0.5 m body (issue 42): a start or a goal
+/// beside a wall had its 8 nearest roadmap nodes behind the walls, so it saw none of them, the
+/// search ended with no path and the trees took 30-85 ms (or more than 0.1 s) where the
+/// roadmap's way takes about 1 ms. An end that sees none of its candidates, or whose
+/// candidates the search cannot reach, now takes the next nearest. On the wall map, a box
+/// beside the start and one beside the goal (walls of one cell round 3 x 3 free cells) hold 9
+/// nodes each, nearer their end than the wall end's corners and hidden from it: with those of
+/// the start's box, the goal's (joined to nothing, so the search cannot reach them, or joined
+/// to the corner beside the goal, so each way the search settles on ends at one the goal does
+/// not see), or both, one tree or two, the goal joins in the first call over the wall end's
+/// corners.
+#[test]
+fn regression_an_end_that_sees_none_of_its_nearest_nodes_takes_the_next() {
+    let mut bits = [0u8; BYTES];
+    let in_box = |c: u16, r: u16, c0: u16| (c0..c0 + 5).contains(&c) && (8..13).contains(&r);
+    let inside = |c: u16, r: u16, c0: u16| (c0 + 1..c0 + 4).contains(&c) && (9..12).contains(&r);
+    pack_grid(&mut bits, COLS, ROWS, |c, r| {
+        (c == 10 && r <= 15)
+            || (in_box(c, r, 1) && !inside(c, r, 1))
+            || (in_box(c, r, 15) && !inside(c, r, 15))
+    })
+    .unwrap();
+    let grid = OccupancyGrid::new(&bits, COLS, ROWS, 1.0).unwrap();
+    let (a, b) = (Point::new(9.4, 16.6), Point::new(11.6, 16.6));
+    let want = START.dist(a) + a.dist(b) + b.dist(GOAL);
+    let decoys =
+        |c0: f32| (0..9).map(move |k| Point::new(c0 + 1.5 + (k / 3) as f32, 9.5 + (k % 3) as f32));
+    let cases = [
+        (true, false, false),
+        (false, true, false),
+        (false, true, true),
+        (true, true, true),
+    ];
+    for (start_box, goal_box, joined) in cases {
+        // Nodes in order of x: the start box's, the wall end's corners, the goal box's; an
+        // edge joins the corners, and the corner beside the goal to its box's nodes if
+        // `joined`.
+        let mut nodes: heapless::Vec<Point, 20> = heapless::Vec::new();
+        let mut corners: heapless::Vec<u8, 20> = heapless::Vec::new();
+        if start_box {
+            for p in decoys(1.0) {
+                nodes.push(p).unwrap();
+                corners.push(NO_CORNER).unwrap();
+            }
+        }
+        let ia = nodes.len();
+        nodes.extend_from_slice(&[a, b]).unwrap();
+        corners.extend_from_slice(&[1, 0]).unwrap();
+        if goal_box {
+            for p in decoys(15.0) {
+                nodes.push(p).unwrap();
+                corners.push(NO_CORNER).unwrap();
+            }
+        }
+        for p in decoys(1.0).chain(decoys(15.0)) {
+            assert!(!grid_free(&grid, START, p) && !grid_free(&grid, GOAL, p));
+        }
+        let ib = ia + 1;
+        let mut edges: heapless::Vec<(usize, usize), 20> = heapless::Vec::new();
+        edges.push((ia, ib)).unwrap();
+        if joined {
+            for d in ib + 1..nodes.len() {
+                edges.push((ib, d)).unwrap();
+            }
+        }
+        // Each node's edges, both ways, in order of the far node.
+        let mut first = [0u32; 21];
+        let mut far: heapless::Vec<u16, 40> = heapless::Vec::new();
+        for (i, f) in first.iter_mut().enumerate().take(nodes.len()) {
+            *f = far.len() as u32;
+            for j in 0..nodes.len() {
+                if edges.contains(&(i, j)) || edges.contains(&(j, i)) {
+                    far.push(j as u16).unwrap();
+                }
+            }
+        }
+        first[nodes.len()] = far.len() as u32;
+        let mut buf = [0u8; 512];
+        let n = write(
+            &grid,
+            &nodes,
+            &corners,
+            &first[..=nodes.len()],
+            &far,
+            &mut buf,
+        )
+        .unwrap();
+        let rm = Roadmap::from_bytes(&buf[..n]).unwrap();
+        for bidirectional in [false, true] {
+            let case = (start_box, goal_box, joined, bidirectional);
+            let mut storage = Storage::<64, 16>::new();
+            let mut p = one_step_planner(&mut storage, grid, rm, bidirectional);
+            p.set_goal(GOAL).unwrap();
+            let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+            let progress = p.plan(&clock, START).unwrap();
+            assert!(progress.goal_in_tree && p.stats().roadmap, "{case:?}");
+            let first = p.stats().first_cost.unwrap();
+            assert!((first - want).abs() < 1e-3, "{case:?}: {first} vs {want}");
+            let mut path = [Point::ZERO; 16];
+            let info = p.path(&mut path).unwrap();
+            for w in path[..info.len].windows(2) {
+                assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
+            }
+        }
+    }
+}
+
+/// Whether the segment from `a` to `b` is free on `grid` alone.
+fn grid_free(grid: &OccupancyGrid<'_>, a: Point, b: Point) -> bool {
+    Map::<2>::new(*grid).free_path(a, b)
+}
+
 /// A roadmap of another map, or one with more nodes than the reverse arena has free slots,
 /// is refused with its reason; the paper's configuration (tactic off) ignores a roadmap.
 #[test]
