@@ -1,12 +1,14 @@
 //! The diffusion-table reader on a 32-bit target (issue 7, case 5): on a Cortex-M4F `usize` is
 //! 32 bits, and a 32-byte table whose header claims 8192 x 8192 cells of 32 `f32` (8 GiB) was
-//! once accepted with a payload length of 0 (release) or panicked (overflow checks). Built in
-//! the dev profile (overflow checks on) and run under QEMU, this checks that such headers are
-//! refused as truncated and that a real table still reads back; QEMU exits with status 0 when
-//! every check holds.
+//! once accepted with a payload length of 0 (release) or panicked (overflow checks). Built
+//! with overflow checks on (the dev profile, or release with them turned on for the crate, as
+//! CI does) and run under QEMU, this checks that such headers are refused as truncated and that
+//! a real table still reads back; QEMU exits with status 0 when every check holds.
 //!
 //! ```sh
 //! cargo run --example table32 --target thumbv7em-none-eabihf --features firmware-example
+//! cargo run --release --example table32 --target thumbv7em-none-eabihf --features firmware-example \
+//!   --config 'profile.release.package.bi-am-rrt.overflow-checks=true'
 //! ```
 #![no_std]
 #![no_main]

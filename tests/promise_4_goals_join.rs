@@ -355,16 +355,16 @@ fn all_twenty_reach_the_goal_in_the_open() {
 }
 
 /// Long (about 10 s in release): in the opt-in suite, `cargo test --release -- --ignored`
-/// (CI runs it).
+/// (not in CI: `.ci/run` leaves it to the opt-in suite).
 #[test]
-#[ignore = "long: run with --ignored (CI does)"]
+#[ignore = "long: run with --ignored (not in CI)"]
 fn all_twenty_reach_the_goal_out_of_the_bug_trap() {
     all_twenty_reach(&builtin::BUG_TRAP);
 }
 
 /// Long (about 15 s in release): in the opt-in suite, as above.
 #[test]
-#[ignore = "long: run with --ignored (CI does)"]
+#[ignore = "long: run with --ignored (not in CI)"]
 fn all_twenty_reach_the_goal_through_the_maze() {
     all_twenty_reach(&builtin::MAZE);
 }
