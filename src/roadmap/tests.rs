@@ -117,6 +117,26 @@ fn planner_on<'s, 'm>(
     Planner::new(storage, map, Euclidean, rng, cfg, START).unwrap()
 }
 
+/// Sets the goal at [`GOAL`] and plans once from [`START`]: the goal joins over the roadmap in
+/// that call, its first path `want` long, every segment of the path free.
+fn joins_over_the_roadmap_in_the_first_call(
+    p: &mut Planner<'_, '_, Euclidean, rand_xorshift::XorShiftRng, 64, 16, 2>,
+    want: f32,
+    case: &dyn core::fmt::Debug,
+) {
+    p.set_goal(GOAL).unwrap();
+    let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
+    let progress = p.plan(&clock, START).unwrap();
+    assert!(progress.goal_in_tree && p.stats().roadmap, "{case:?}");
+    let first = p.stats().first_cost.unwrap();
+    assert!((first - want).abs() < 1e-3, "{case:?}: {first} vs {want}");
+    let mut path = [Point::ZERO; 16];
+    let info = p.path(&mut path).unwrap();
+    for w in path[..info.len].windows(2) {
+        assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
+    }
+}
+
 /// A default planner on `grid` (one tree or two), one expansion a call, `rm` attached.
 fn one_step_planner<'s, 'm>(
     storage: &'s mut Storage<64, 16>,
@@ -273,17 +293,7 @@ fn a_node_an_end_does_not_see_is_dropped_and_the_search_goes_on() {
             let mut p = one_step_planner(&mut storage, grid, rm, bidirectional);
             p.add_obstacle(Circle::new(disc, 0.5)).unwrap();
             assert!(!p.map().free_path(end, corner) && p.map().free_path(end, c));
-            p.set_goal(GOAL).unwrap();
-            let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
-            let progress = p.plan(&clock, START).unwrap();
-            assert!(progress.goal_in_tree && p.stats().roadmap, "{case:?}");
-            let first = p.stats().first_cost.unwrap();
-            assert!((first - want).abs() < 1e-3, "{case:?}: {first} vs {want}");
-            let mut path = [Point::ZERO; 16];
-            let info = p.path(&mut path).unwrap();
-            for w in path[..info.len].windows(2) {
-                assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
-            }
+            joins_over_the_roadmap_in_the_first_call(&mut p, want, &case);
         }
     }
 }
@@ -380,17 +390,7 @@ fn regression_an_end_that_sees_none_of_its_nearest_nodes_takes_the_next() {
             let case = (start_box, goal_box, joined, bidirectional);
             let mut storage = Storage::<64, 16>::new();
             let mut p = one_step_planner(&mut storage, grid, rm, bidirectional);
-            p.set_goal(GOAL).unwrap();
-            let clock = FakeClock::nanos().with_work_cost(10).with_step(1);
-            let progress = p.plan(&clock, START).unwrap();
-            assert!(progress.goal_in_tree && p.stats().roadmap, "{case:?}");
-            let first = p.stats().first_cost.unwrap();
-            assert!((first - want).abs() < 1e-3, "{case:?}: {first} vs {want}");
-            let mut path = [Point::ZERO; 16];
-            let info = p.path(&mut path).unwrap();
-            for w in path[..info.len].windows(2) {
-                assert!(p.map().free_path(w[0], w[1]), "{case:?}: {:?}", w);
-            }
+            joins_over_the_roadmap_in_the_first_call(&mut p, want, &case);
         }
     }
 }
