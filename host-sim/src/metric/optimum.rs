@@ -210,30 +210,13 @@ impl Corners {
     fn leg(&self, a: Point, b: Point) -> std::borrow::Cow<'_, Graph> {
         use std::borrow::Cow;
         let g = &self.filled;
-        let cells = |p: Point| {
+        // The dead cells whose closed square holds an end.
+        let cells = |p: Point| -> Vec<usize> {
             let p = (f64::from(p.x) / g.cell, f64::from(p.y) / g.cell);
-            let mut out = Vec::new();
-            // An end off the map has no path (`Graph::search_path`), nor cells.
-            let (w, h) = (g.cols as f64, g.rows as f64);
-            if !((0.0..=w).contains(&p.0) && (0.0..=h).contains(&p.1)) {
-                return out;
-            }
-            let (pi, pj) = (floor_any(p.0), floor_any(p.1));
-            for r in pj - 1..=pj {
-                for c in pi - 1..=pi {
-                    let holds = (c as f64) <= p.0
-                        && p.0 <= (c + 1) as f64
-                        && (r as f64) <= p.1
-                        && p.1 <= (r + 1) as f64;
-                    if holds && c >= 0 && r >= 0 && c < g.cols && r < g.rows {
-                        let k = (r * g.cols + c) as usize;
-                        if self.up[k] != LIVE {
-                            out.push(k);
-                        }
-                    }
-                }
-            }
-            out
+            cells_holding(p, g.cols, g.rows)
+                .map(|(c, r)| (r * g.cols + c) as usize)
+                .filter(|&k| self.up[k] != LIVE)
+                .collect()
         };
         let (from_a, from_b) = (cells(a), cells(b));
         if from_a.is_empty() && from_b.is_empty() {
@@ -1023,22 +1006,11 @@ impl Graph {
         let mut buckets: [Vec<(u32, u32)>; NB] = std::array::from_fn(|_| Vec::new());
         let mut queued = 0usize;
         // The corners of the free cells whose closed square holds a point.
-        let cell_corners = |p: (f64, f64)| {
-            let (pi, pj) = (floor_any(p.0), floor_any(p.1));
-            let mut out = Vec::new();
-            for c in pi - 1..=pi {
-                for r in pj - 1..=pj {
-                    let around = (c as f64) <= p.0
-                        && p.0 <= (c + 1) as f64
-                        && (r as f64) <= p.1
-                        && p.1 <= (r + 1) as f64;
-                    let inside = c >= 0 && r >= 0 && c < self.cols && r < self.rows;
-                    if around && inside && !self.occ(c, r) {
-                        out.extend([(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)]);
-                    }
-                }
-            }
-            out
+        let cell_corners = |p: (f64, f64)| -> Vec<(i64, i64)> {
+            cells_holding(p, self.cols, self.rows)
+                .filter(|&(c, r)| !self.occ(c, r))
+                .flat_map(|(c, r)| [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)])
+                .collect()
         };
         let mut start_left = cell_corners(s);
         start_left.sort_unstable();
@@ -1213,6 +1185,29 @@ impl Graph {
         }
         None
     }
+}
+
+/// The cells of a `cols` x `rows` map whose closed square holds point `p` (cell units): one
+/// to four, none off the map.
+fn cells_holding(p: (f64, f64), cols: i64, rows: i64) -> impl Iterator<Item = (i64, i64)> {
+    let on_map = (0.0..=cols as f64).contains(&p.0) && (0.0..=rows as f64).contains(&p.1);
+    let (pi, pj) = if on_map {
+        (floor_any(p.0), floor_any(p.1))
+    } else {
+        (-2, -2)
+    };
+    (pj - 1..=pj)
+        .flat_map(move |r| (pi - 1..=pi).map(move |c| (c, r)))
+        .filter(move |&(c, r)| {
+            c >= 0
+                && r >= 0
+                && c < cols
+                && r < rows
+                && (c as f64) <= p.0
+                && p.0 <= (c + 1) as f64
+                && (r as f64) <= p.1
+                && p.1 <= (r + 1) as f64
+        })
 }
 
 /// The octile distance (the lattice's steps, `LATTICE_UNIT` and `DIAG_DOWN`) from a lattice
