@@ -441,13 +441,12 @@ impl Graph {
             }
         }
         if dropped {
-            let keep: Vec<bool> = self.corners.iter().map(|p| p.0 >= 0.0).collect();
-            let mut k = 0;
-            self.quadrant.retain(|_| {
-                k += 1;
-                keep[k - 1]
-            });
-            self.corners.retain(|p| p.0 >= 0.0);
+            (self.corners, self.quadrant) = self
+                .corners
+                .iter()
+                .zip(&self.quadrant)
+                .filter(|(p, _)| p.0 >= 0.0)
+                .unzip();
             for (k, &(x, y)) in self.corners.iter().enumerate() {
                 self.index[(y as i64 * w + x as i64) as usize] = k as u32 + 1;
             }
@@ -1017,23 +1016,7 @@ impl Graph {
         start_left.dedup();
         // The key's heuristic: the lattice's octile distance to the box round the start's
         // points (their nearest, so consistent; 0 on each of them).
-        let (x0, x1) = start_left
-            .iter()
-            .fold((i64::MAX, i64::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
-        let (y0, y1) = start_left
-            .iter()
-            .fold((i64::MAX, i64::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
-        // (No free cell round the start: any box keeps it consistent.)
-        let to_start = if start_left.is_empty() {
-            Octile {
-                x0: 0,
-                x1: 0,
-                y0: 0,
-                y1: 0,
-            }
-        } else {
-            Octile { x0, x1, y0, y1 }
-        };
+        let to_start = Octile::around(&start_left);
         let mut start_left: Vec<usize> = start_left.into_iter().map(|(i, j)| at(i, j)).collect();
         // The least key queued: the buckets hold keys from it to it plus `NB` less one (the
         // goal's points are at most a cell apart, their keys within two diagonals).
@@ -1220,6 +1203,32 @@ struct Octile {
 }
 
 impl Octile {
+    /// The box round `points` (the origin when there are none: any box is consistent).
+    fn around(points: &[(i64, i64)]) -> Self {
+        let Some(&(i, j)) = points.first() else {
+            return Self {
+                x0: 0,
+                x1: 0,
+                y0: 0,
+                y1: 0,
+            };
+        };
+        points.iter().fold(
+            Self {
+                x0: i,
+                x1: i,
+                y0: j,
+                y1: j,
+            },
+            |b, &(i, j)| Self {
+                x0: b.x0.min(i),
+                x1: b.x1.max(i),
+                y0: b.y0.min(j),
+                y1: b.y1.max(j),
+            },
+        )
+    }
+
     /// From lattice point `(i, j)`.
     #[inline]
     fn at(&self, i: i64, j: i64) -> u32 {
@@ -1290,8 +1299,8 @@ fn taut_halves(a: (f64, f64), w: (f64, f64)) -> Vec<(f64, f64)> {
     vec![(-sign * a.1, sign * a.0), (-sign * w.1, sign * w.0)]
 }
 
-/// `x.floor()` as an integer, for any sign (without the library call: the casts' corners
-/// round towards zero, so one below when that went up).
+/// `x.floor()` as an integer, for any sign, without the library call (`as` rounds towards
+/// zero: one less where that rounded up).
 #[inline]
 fn floor_any(x: f64) -> i64 {
     let t = x as i64;
