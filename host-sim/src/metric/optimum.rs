@@ -29,7 +29,9 @@
 //! - **From a corner, only the corners in view**, found by casting shadows row by row in four
 //!   quadrants (`Graph::lattice_in_view`: a superset, `sees` decides), and only on the
 //!   side that keeps the path taut round the corner's occupied cell (a shortest path bends
-//!   only round it); none of them head on into its cell (no taut way on from there).
+//!   only round it); none of them head on into its cell (no taut way on from there). A row
+//!   is read a run of cells at a time from bit rows of the map and of its corners (`CastRows`),
+//!   so a cast over a room of fine cells costs its words, not its cells.
 //! - **A segment is walked crossing by crossing** and dropped at its first blocked piece, the
 //!   core's span test answering for long free ones.
 //! - **Long edges are tested lazily**: an edge free over its first pieces that beats every
@@ -57,6 +59,7 @@ use std::collections::BinaryHeap;
 
 use bi_am_rrt::Point;
 use bi_am_rrt::map::OccupancyGrid;
+use bitvec::vec::BitVec;
 
 use crate::scenario::Scenario;
 
@@ -327,6 +330,97 @@ struct Graph {
     /// left, down, up (beside a free cell or the map's edge), down-right, up-left, up-right,
     /// down-left (across a free cell).
     steps: Vec<u8>,
+    /// The shadow casts' rows (`lattice_in_view`).
+    cast: CastRows,
+}
+
+/// A map's rows for the shadow casts, read a word at a time: the occupied cells by rows (bit
+/// `r * cols + c`) and by columns (bit `c * rows + r`), and the corners' lattice points
+/// likewise (bit `j * (cols + 1) + i` and `i * (rows + 1) + j`).
+#[derive(Clone)]
+struct CastRows {
+    occ: [BitVec<u64>; 2],
+    corners: [BitVec<u64>; 2],
+}
+
+impl CastRows {
+    /// The rows of a `cols` x `rows` map with cells `occupied` (row-major), no corners yet.
+    fn of(occupied: &[bool], cols: usize, rows: usize) -> Self {
+        let by_cols = (0..cols).flat_map(|c| (0..rows).map(move |r| r * cols + c));
+        Self {
+            occ: [
+                occupied.iter().copied().collect(),
+                by_cols.map(|k| occupied[k]).collect(),
+            ],
+            corners: [0, 1].map(|_| BitVec::repeat(false, (cols + 1) * (rows + 1))),
+        }
+    }
+
+    /// Marks lattice point `(i, j)` a corner or not.
+    fn mark(&mut self, (cols, rows): (i64, i64), (i, j): (i64, i64), corner: bool) {
+        let [a, b] = &mut self.corners;
+        put(a, (j * (cols + 1) + i) as usize, corner);
+        put(b, (i * (rows + 1) + j) as usize, corner);
+    }
+
+    /// Frees cell `(c, r)`.
+    fn free(&mut self, (cols, rows): (i64, i64), (c, r): (i64, i64)) {
+        let [a, b] = &mut self.occ;
+        put(a, (r * cols + c) as usize, false);
+        put(b, (c * rows + r) as usize, false);
+    }
+}
+
+/// Sets bit `k` of `bits` to `on`, on its word (a leg frees a whole corridor's cells).
+fn put(bits: &mut BitVec<u64>, k: usize, on: bool) {
+    let word = &mut bits.as_raw_mut_slice()[k / 64];
+    let mask = 1u64 << (k % 64);
+    *word = if on { *word | mask } else { *word & !mask };
+}
+
+/// The first bit at or after `from` (and up to `to`, both inclusive) that differs from bit
+/// `from`, in `words` (least significant bit first), if any: the end of a run.
+fn run_end(words: &[u64], from: usize, to: usize) -> Option<usize> {
+    let flip = if words[from / 64] >> (from % 64) & 1 == 1 {
+        u64::MAX
+    } else {
+        0
+    };
+    let mut w = from / 64;
+    // The bits that differ, those before `from` masked off.
+    let mut diff = (words[w] ^ flip) & (u64::MAX << (from % 64));
+    loop {
+        if diff != 0 {
+            let at = w * 64 + diff.trailing_zeros() as usize;
+            return (at <= to).then_some(at);
+        }
+        w += 1;
+        if w * 64 > to {
+            return None;
+        }
+        diff = words[w] ^ flip;
+    }
+}
+
+/// Each set bit from `from` to `to` (inclusive) in `words`, in order.
+fn each_one(words: &[u64], from: usize, to: usize, mut f: impl FnMut(usize)) {
+    let mut w = from / 64;
+    let mut bits = words[w] & (u64::MAX << (from % 64));
+    loop {
+        while bits != 0 {
+            let at = w * 64 + bits.trailing_zeros() as usize;
+            if at > to {
+                return;
+            }
+            f(at);
+            bits &= bits - 1;
+        }
+        w += 1;
+        if w * 64 > to {
+            return;
+        }
+        bits = words[w];
+    }
 }
 
 impl Graph {
@@ -337,6 +431,7 @@ impl Graph {
             cols,
             rows,
             cell: grid.cell_size() as f64,
+            cast: CastRows::of(&occupied, cols as usize, rows as usize),
             occupied,
             bits: grid.bits().to_vec(),
             corners: Vec::new(),
@@ -354,6 +449,7 @@ impl Graph {
         }
         for (k, &(x, y)) in me.corners.iter().enumerate() {
             me.index[(y as i64 * (cols + 1) + x as i64) as usize] = k as u32 + 1;
+            me.cast.mark((cols, rows), (x as i64, y as i64), true);
         }
         for j in 0..=rows {
             for i in 0..=cols {
@@ -411,10 +507,12 @@ impl Graph {
     /// recomputed, corners that are no more dropped and new ones added.
     fn open(&mut self, cells: &[usize]) {
         let w = self.cols + 1;
+        let size = (self.cols, self.rows);
         let mut points: Vec<(i64, i64)> = Vec::new();
         for &k in cells {
             self.occupied[k] = false;
             let (c, r) = ((k as i64) % self.cols, (k as i64) / self.cols);
+            self.cast.free(size, (c, r));
             points.extend([(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)]);
         }
         // A point met twice finds its marks already right the second time.
@@ -429,12 +527,14 @@ impl Graph {
                     self.corners.push((i as f64, j as f64));
                     self.quadrant.push(q);
                     self.index[p] = self.corners.len() as u32;
+                    self.cast.mark(size, (i, j), true);
                 }
                 (k @ 1.., Some(q)) => self.quadrant[k as usize - 1] = q,
                 (k @ 1.., None) => {
                     // Marked off the map, dropped below.
                     self.corners[k as usize - 1] = (-1.0, -1.0);
                     self.index[p] = 0;
+                    self.cast.mark(size, (i, j), false);
                     dropped = true;
                 }
                 (0, None) => {}
@@ -753,19 +853,15 @@ impl Graph {
                 stamp += 1;
                 view.clear();
                 let budget = n.saturating_mul(fov_budget).max(FOV_CELLS);
-                let lattice = (self.cols + 1, self.rows + 1);
                 let ok = self.lattice_in_view(
                     (pu.0 as i64, pu.1 as i64),
                     depth,
                     budget,
                     &halves,
-                    &mut |i, j| {
-                        if i >= 0 && j >= 0 && i < lattice.0 && j < lattice.1 {
-                            let k = self.index[(j * lattice.0 + i) as usize];
-                            if k != 0 && seen[k as usize - 1] != stamp {
-                                seen[k as usize - 1] = stamp;
-                                view.push(k as usize - 1);
-                            }
+                    &mut |k| {
+                        if seen[k] != stamp {
+                            seen[k] = stamp;
+                            view.push(k);
                         }
                     },
                 );
@@ -821,35 +917,42 @@ impl Graph {
         None
     }
 
-    /// The lattice points that may see lattice point `(i0, j0)`: the corners of every free
-    /// cell that a ray from it reaches without crossing an occupied cell's interior, found by
-    /// casting shadows row by row in four quadrants (a superset: a ray grazing an occupied
-    /// cell's corner or slipping through a diagonal pinch is kept, `sees` decides). Rays are
-    /// followed to `depth` rows (a point of row `d` is at least `d - 1` away). `None` once
-    /// more than `budget` cells were looked at (the caller scans its candidates instead).
+    /// The corners that may see lattice point `(i0, j0)` (their numbers, to `found`): the
+    /// corners of every free cell that a ray from it reaches without crossing an occupied
+    /// cell's interior, found by casting shadows row by row in four quadrants (a superset: a
+    /// ray grazing an occupied cell's corner or slipping through a diagonal pinch is kept,
+    /// `sees` decides). A row is read a run at a time from [`CastRows`] (each block of
+    /// occupied cells narrows the rays once; a run of free cells gives its corners from its
+    /// bits), so a cast over a room of fine cells costs its words, not its
+    /// cells. Rays are followed to `depth` rows (a point of row `d` is at least `d - 1`
+    /// away). `None` once more than `budget` cells were looked at (the caller scans its
+    /// candidates instead).
     fn lattice_in_view(
         &self,
         (i0, j0): (i64, i64),
         depth: i64,
         budget: usize,
         halves: &[(f64, f64)],
-        found: &mut impl FnMut(i64, i64),
+        found: &mut impl FnMut(usize),
     ) -> Option<()> {
         // Shadows shrink by this much (slopes are at most 1 in a quadrant, coordinates below
-        // 2^16: the slopes' rounding is far below it).
+        // 2^16: the slopes' rounding is far below it, and far below the overlap of two
+        // neighbouring cells' slopes, so a block of occupied cells shades what its cells do
+        // one by one).
         const EPS: f64 = 1e-9;
         let mut looked = 0usize;
         let mut rays: Vec<(f64, f64)> = Vec::new();
         let mut next: Vec<(f64, f64)> = Vec::new();
         // A quadrant's frame: lateral x' and depth y' (rows d of y' in [d - 1, d]), their unit
-        // vectors in the grid's frame: up (grid y decreasing), down, right, left.
+        // vectors in the grid's frame: up (grid y decreasing), down, right, left. The lateral
+        // axis always points along increasing grid indices, so a frame's row is a run of
+        // bits: the grid's rows in the first two, its columns in the last two.
         let axes: [((i64, i64), (i64, i64)); 4] = [
             ((1, 0), (0, -1)),
             ((1, 0), (0, 1)),
             ((0, 1), (1, 0)),
             ((0, 1), (-1, 0)),
         ];
-        let inside = |(c, r): (i64, i64)| c >= 0 && r >= 0 && c < self.cols && r < self.rows;
         // Slope (x' / y') of a lattice point of the frame; a point at depth 0 lies on the
         // quadrant's side (the origin itself is never a cell's far corner that matters).
         let slope = |x: i64, y: i64| {
@@ -865,18 +968,44 @@ impl Graph {
                 x as f64 / y as f64
             }
         };
+        // The least and the largest slope through cell `c` of row `d` (its corners').
+        let slopes = |c: i64, d: i64| {
+            let s = [
+                slope(c, d - 1),
+                slope(c + 1, d - 1),
+                slope(c, d),
+                slope(c + 1, d),
+            ];
+            let s = s.iter().copied().filter(|v| !v.is_nan());
+            (
+                s.clone().fold(f64::INFINITY, f64::min),
+                s.fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
         for (lat, dep) in axes {
-            // The lattice point at (x', y') of the frame, and the cell of column c in row d
-            // (the one holding the frame's point (c + 1/2, d - 1/2)), in the grid's frame.
-            let point_at =
-                |x: i64, y: i64| (i0 + x * lat.0 + y * dep.0, j0 + x * lat.1 + y * dep.1);
-            let cell_at = |c: i64, d: i64| {
-                let (x2, y2) = (2 * c + 1, 2 * d - 1);
-                (
-                    (2 * i0 + x2 * lat.0 + y2 * dep.0).div_euclid(2),
-                    (2 * j0 + x2 * lat.1 + y2 * dep.1).div_euclid(2),
-                )
+            let by_rows = usize::from(lat.1 != 0);
+            // The frame's lateral origin and extent (cells of a row), its rows' count, the
+            // line of the origin and the sense of depth along the lines.
+            let (base, extent, lines, origin, sense) = if by_rows == 0 {
+                (i0, self.cols, self.rows, j0, dep.1)
+            } else {
+                (j0, self.rows, self.cols, i0, dep.0)
             };
+            let (occ, corners) = (
+                self.cast.occ[by_rows].as_raw_slice(),
+                self.cast.corners[by_rows].as_raw_slice(),
+            );
+            // The line of row d's cells, and of the frame's lattice points at depth y.
+            let cell_line = |d: i64| {
+                if sense > 0 {
+                    origin + d - 1
+                } else {
+                    origin - d
+                }
+            };
+            let point_line = |y: i64| origin + y * sense;
+            // Columns c of the frame on the map.
+            let (m0, m1) = (-base, extent - 1 - base);
             // The quadrant's slopes t in [-1, 1] whose direction t lat + dep keeps to every
             // half-plane {b : n . b >= 0} (widened by EPS).
             let (mut lo, mut hi) = (-1.0f64, 1.0f64);
@@ -897,9 +1026,17 @@ impl Graph {
             rays.clear();
             rays.push((lo, hi));
             for d in 1..=depth {
-                if rays.is_empty() {
+                let line = cell_line(d);
+                // A row off the map: every ray has left it and never comes back to a corner.
+                if rays.is_empty() || line < 0 || line >= lines {
                     break;
                 }
+                // Cell c of the row (on the map) is bit `row + base + c`.
+                let row = line * extent;
+                let bit = |k: i64| occ[k as usize / 64] >> (k as usize % 64) & 1 == 1;
+                // Cell 0 of the row occupied (or off the map): the ray along the frame's
+                // axis, between cells -1 and 0, is shut when cell -1 is too.
+                let zero_shut = !(m0..=m1).contains(&0) || bit(row + base);
                 next.clear();
                 for &(lo, hi) in &rays {
                     let (df, dn) = ((d - 1) as f64, d as f64);
@@ -910,47 +1047,32 @@ impl Graph {
                     let mark = next.len();
                     let mut c = c0;
                     while c <= c1 {
-                        let cell = cell_at(c, d);
-                        let occupied = if inside(cell) {
+                        // The block of cells from c on that are all occupied (or off the
+                        // map) or all free, to c1 at most.
+                        let (end, occupied) = if c < m0 {
+                            (c1.min(m0 - 1), true)
+                        } else if c > m1 {
+                            (c1, true)
+                        } else {
                             any_inside = true;
-                            looked += 1;
+                            let last = c1.min(m1);
+                            let first = (row + base + c) as usize;
+                            let end = run_end(occ, first, (row + base + last) as usize)
+                                .map_or(last, |k| c + (k - first) as i64 - 1);
+                            looked += (end - c + 1) as usize;
                             if looked > budget {
                                 return None;
                             }
-                            self.occ(cell.0, cell.1)
-                        } else {
-                            // Off the map: a ray that leaves never comes back to a corner.
-                            true
+                            (end, bit(row + base + c))
                         };
                         if occupied {
-                            // The slopes through the cell's interior, shrunk.
-                            let s = [
-                                slope(c, d - 1),
-                                slope(c + 1, d - 1),
-                                slope(c, d),
-                                slope(c + 1, d),
-                            ];
-                            let smin = s
-                                .iter()
-                                .copied()
-                                .filter(|v| !v.is_nan())
-                                .fold(f64::INFINITY, f64::min);
-                            let mut smax = s
-                                .iter()
-                                .copied()
-                                .filter(|v| !v.is_nan())
-                                .fold(f64::NEG_INFINITY, f64::max);
-                            // The ray along the frame's axis (x' = 0) runs between cells -1
-                            // and 0: shut when both are occupied.
-                            if c == -1 && {
-                                let other = cell_at(0, d);
-                                !inside(other) || self.occ(other.0, other.1)
-                            } {
-                                smax = EPS;
+                            // The slopes through the block's interior, shrunk.
+                            let smin = slopes(c, d).0 + EPS;
+                            let smax = if end == -1 && zero_shut {
+                                EPS
                             } else {
-                                smax -= EPS;
-                            }
-                            let smin = smin + EPS;
+                                slopes(end, d).1 - EPS
+                            };
                             if smin < smax {
                                 if smin > run {
                                     next.push((run, smin.min(hi)));
@@ -958,12 +1080,24 @@ impl Graph {
                                 run = run.max(smax);
                             }
                         } else {
-                            for (x, y) in [(c, d - 1), (c + 1, d - 1), (c, d), (c + 1, d)] {
-                                let (i, j) = point_at(x, y);
-                                found(i, j);
+                            // The corners of the free cells: lattice points c..=end + 1 at
+                            // depths d - 1 and d.
+                            for y in [d - 1, d] {
+                                let at = point_line(y) * (extent + 1) + base;
+                                let (from, to) = ((at + c) as usize, (at + end + 1) as usize);
+                                each_one(corners, from, to, |k| {
+                                    let x = c + (k - from) as i64;
+                                    let (i, j) = if by_rows == 0 {
+                                        (base + x, point_line(y))
+                                    } else {
+                                        (point_line(y), base + x)
+                                    };
+                                    let k = self.index[(j * (self.cols + 1) + i) as usize];
+                                    found(k as usize - 1);
+                                });
                             }
                         }
-                        c += 1;
+                        c = end + 1;
                     }
                     if run <= hi {
                         next.push((run, hi));
@@ -1767,6 +1901,69 @@ mod tests {
             assert_eq!(corners.shortest(off, inside), None, "{off:?}");
         }
         assert!(corners.shortest(inside, Point::new(8.5, 8.5)).is_some());
+    }
+
+    /// The shadow casts read rows a word at a time: on maps wider than a word (rooms of
+    /// sparse walls, where runs span words, and clutter, where they are short), from corners
+    /// and from points on the map's edge, every corner in view is found.
+    #[test]
+    fn shadow_casts_find_every_corner_in_view() {
+        let mut next = xorshift(0x6a09_e667_f3bc_c909u64);
+        let mut checked = 0usize;
+        for case in 0..24 {
+            let (w, h) = (60 + (next() % 140) as i64, 60 + (next() % 140) as i64);
+            let occ: Vec<bool> = if case % 2 == 0 {
+                let mut o = vec![false; (w * h) as usize];
+                for _ in 0..6 + next() % 10 {
+                    let (x, y) = ((next() % w as u64) as i64, (next() % h as u64) as i64);
+                    let (bw, bh) = (1 + (next() % 30) as i64, 1 + (next() % 4) as i64);
+                    let (bw, bh) = if next().is_multiple_of(2) {
+                        (bw, bh)
+                    } else {
+                        (bh, bw)
+                    };
+                    for r in y..(y + bh).min(h) {
+                        for c in x..(x + bw).min(w) {
+                            o[(r * w + c) as usize] = true;
+                        }
+                    }
+                }
+                o
+            } else {
+                (0..w * h).map(|_| next() % 100 < 8).collect()
+            };
+            let g = OwnedGrid::from_fn(w as u16, h as u16, 0.05, |c, r| {
+                occ[usize::from(r) * w as usize + usize::from(c)]
+            })
+            .unwrap();
+            let graph = Graph::new(&g.grid(), occ.clone());
+            let n = graph.len();
+            for t in 0..12 {
+                let o = if t % 4 == 3 {
+                    (0, (next() % (h as u64 + 1)) as i64)
+                } else if n > 0 {
+                    let p = graph.corners[(next() % n as u64) as usize];
+                    (p.0 as i64, p.1 as i64)
+                } else {
+                    continue;
+                };
+                // Every corner in view within `depth - 1`, the cast's promise.
+                let depth = 2 + (next() % (w.max(h) as u64)) as i64;
+                let mut found = vec![false; n];
+                let cast =
+                    graph.lattice_in_view(o, depth, usize::MAX, &[], &mut |k| found[k] = true);
+                assert!(cast.is_some());
+                let p = (o.0 as f64, o.1 as f64);
+                for (k, &q) in graph.corners.iter().enumerate() {
+                    let far = ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt();
+                    if q != p && far <= (depth - 1) as f64 && graph.sees(p, q) {
+                        assert!(found[k], "case {case}: {q:?} sees {p:?} but was not cast");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 2_000, "only {checked} corners in view");
     }
 
     #[test]
