@@ -45,11 +45,10 @@
 //! loops and maps of 30-45 % clutter, ends inside cells, on their sides and corners, on the
 //! map's edge, in dead ends and not). `host-sim optimum --no-grid` prints each leg's figure
 //! and CPU time (`scripts/gen-maps.py --big` for the generated maps; the figures of the last
-//! measurement are in `docs/notebook/exact-optimum.md`): under a second a leg on the mazes
-//! of 1-cell corridors up to 4,095 cells (2.9 million corners, legs of 216-690 km), above it
-//! for the longest legs across a 4,096-cell building drawn like a SLAM map at 0.05 m (the
-//! lattice search over most of its 16.8 million points and the shadows cast over its rooms'
-//! fine cells).
+//! measurement are in `docs/notebook/exact-optimum.md`): about a second a leg at most, on the
+//! mazes of 1-cell corridors up to 4,095 cells (2.9 million corners, legs of 216-690 km) and
+//! on the longest legs across a 4,096-cell building drawn like a SLAM map at 0.05 m (there
+//! the lattice search over most of its 16.8 million points is most of it).
 //!
 //! Checked against the exact optima of the 24 reference legs in
 //! `../shared/anchors/reference-figures.md` (test `optima_match_the_reference_figures`).
@@ -508,16 +507,23 @@ impl Graph {
     fn open(&mut self, cells: &[usize]) {
         let w = self.cols + 1;
         let size = (self.cols, self.rows);
-        let mut points: Vec<(i64, i64)> = Vec::new();
+        let at = |k: usize| ((k as i64) % self.cols, (k as i64) / self.cols);
         for &k in cells {
             self.occupied[k] = false;
-            let (c, r) = ((k as i64) % self.cols, (k as i64) / self.cols);
-            self.cast.free(size, (c, r));
-            points.extend([(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)]);
+            self.cast.free(size, at(k));
         }
-        // A point met twice finds its marks already right the second time.
+        // Each lattice point once (a leg opens a corridor's cells, each point shared by up to
+        // four of them).
+        let mut met: BitVec<u64> = BitVec::repeat(false, self.index.len());
+        let points = cells.iter().flat_map(|&k| {
+            let (c, r) = at(k);
+            [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)]
+        });
         let mut dropped = false;
-        for &(i, j) in &points {
+        for (i, j) in points {
+            if met.replace((j * w + i) as usize, true) {
+                continue;
+            }
             let p = (j * w + i) as usize;
             self.steps[p] = self.steps_at(i, j);
             let inner = i > 0 && j > 0 && i < self.cols && j < self.rows;
@@ -792,6 +798,9 @@ impl Graph {
             Ordering::Greater => s,
         };
         let hv = |i: usize| if i < n { h[i] } else { 0.0 };
+        // In a building most of the corners the start looks at first (it casts no shadows)
+        // lie behind its room's walls: the lattice tells most of them without a walk.
+        let start_view = StartView::new(self, &to_goal, s);
         let cast = n >= fov_min;
         let mut seen = vec![0u32; n];
         let mut stamp = 0u32;
@@ -894,6 +903,9 @@ impl Graph {
                     && (v == n || d.0 * quad[v].0 <= 0.0 || d.1 * quad[v].1 <= 0.0)
                     && back.is_none_or(|(a, w)| taut(a, d, w))
                 {
+                    if u == n + 1 && v < n && start_view.hides(&to_goal, pv) {
+                        continue;
+                    }
                     let tested = match self.sees_at_first(pu, pv) {
                         Some(false) => continue,
                         Some(true) => true,
@@ -1385,6 +1397,23 @@ struct ToGoal {
 }
 
 impl ToGoal {
+    /// Lattice point `(i, j)`'s distance as the search left it: the distance when settled,
+    /// else at least it (`u32::MAX`: not reached).
+    fn raw(&self, i: i64, j: i64) -> u32 {
+        self.dist[(j * self.w + i) as usize]
+    }
+
+    /// Lattice point `(i, j)`'s distance when the search settled it: every point whose key
+    /// is not above the cap (the keys come off in order).
+    fn exact(&self, i: i64, j: i64) -> Option<u32> {
+        let d = self.raw(i, j);
+        let settled = match self.cap {
+            None => d != u32::MAX,
+            Some(cap) => u64::from(d) + u64::from(self.to_start.at(i, j)) <= u64::from(cap),
+        };
+        settled.then_some(d)
+    }
+
     /// A lower bound of lattice point `(i, j)`'s distance to the goal (`u32::MAX`: none).
     /// A point the search settled has its distance; one it did not has a key above the cap
     /// (the keys come off in order), so its distance is at least the cap less its heuristic,
@@ -1396,6 +1425,39 @@ impl ToGoal {
             None => d,
             Some(cap) => d.min((cap + 1).saturating_sub(self.to_start.at(i, j))),
         }
+    }
+}
+
+/// What the lattice says of the start's view: its lattice points (the corners of the free
+/// cells that hold it) with their distances to the goal, those the lattice search settled.
+/// A free segment from the start to a corner, taken on to one of them, gives a lattice path
+/// between the two no longer than the stretch times that way (the lattice's bound,
+/// [`Graph::lattice_to`]), so a corner nearer the goal over the lattice than one of them by
+/// more lies out of the start's view.
+struct StartView {
+    s: (f64, f64),
+    points: Vec<((f64, f64), f64)>,
+}
+
+impl StartView {
+    fn new(graph: &Graph, to_goal: &ToGoal, s: (f64, f64)) -> Self {
+        let points = cells_holding(s, graph.cols, graph.rows)
+            .filter(|&(c, r)| !graph.occ(c, r))
+            .flat_map(|(c, r)| [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)])
+            .filter_map(|(i, j)| Some(((i as f64, j as f64), f64::from(to_goal.exact(i, j)?))))
+            .collect();
+        Self { s, points }
+    }
+
+    /// Whether corner `v` (a lattice point) is out of the start's view for certain.
+    fn hides(&self, to_goal: &ToGoal, v: (f64, f64)) -> bool {
+        let dist =
+            |p: (f64, f64), q: (f64, f64)| ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt();
+        let dv = f64::from(to_goal.raw(v.0 as i64, v.1 as i64));
+        let sv = dist(self.s, v);
+        self.points
+            .iter()
+            .any(|&(q, dq)| dq > dv + LATTICE_STRETCH * LATTICE_UNIT * (sv + dist(self.s, q)) + 1.0)
     }
 }
 
@@ -1964,6 +2026,78 @@ mod tests {
             }
         }
         assert!(checked > 2_000, "only {checked} corners in view");
+    }
+
+    /// The lattice hides no corner the start sees: random maps (rooms of sparse walls and
+    /// 10-40 % clutter, at 1 and 0.05 m), starts inside cells, on their sides and corners,
+    /// goals anywhere; and it does hide corners behind walls.
+    #[test]
+    fn the_lattice_hides_no_corner_in_the_starts_view() {
+        let mut next = xorshift(0xbb67_ae85_84ca_a73bu64);
+        let (mut seen, mut hidden) = (0usize, 0usize);
+        for case in 0..60 {
+            let (w, h) = (20 + (next() % 100) as i64, 20 + (next() % 100) as i64);
+            let occ: Vec<bool> = if case % 2 == 0 {
+                let mut o = vec![false; (w * h) as usize];
+                for _ in 0..4 + next() % 8 {
+                    let (x, y) = ((next() % w as u64) as i64, (next() % h as u64) as i64);
+                    let (bw, bh) = (1 + (next() % 40) as i64, 1 + (next() % 3) as i64);
+                    let (bw, bh) = if next().is_multiple_of(2) {
+                        (bw, bh)
+                    } else {
+                        (bh, bw)
+                    };
+                    for r in y..(y + bh).min(h) {
+                        for c in x..(x + bw).min(w) {
+                            o[(r * w + c) as usize] = true;
+                        }
+                    }
+                }
+                o
+            } else {
+                let density = [10, 25, 40][case % 3];
+                (0..w * h).map(|_| next() % 100 < density).collect()
+            };
+            let cell = [1.0f32, 0.05][case % 2];
+            let g = OwnedGrid::from_fn(w as u16, h as u16, cell, |c, r| {
+                occ[usize::from(r) * w as usize + usize::from(c)]
+            })
+            .unwrap();
+            let graph = Graph::new(&g.grid(), occ.clone());
+            let free: Vec<(i64, i64)> = (0..h)
+                .flat_map(|r| (0..w).map(move |c| (c, r)))
+                .filter(|&(c, r)| !occ[(r * w + c) as usize])
+                .collect();
+            if free.len() < 2 {
+                continue;
+            }
+            for t in 0..6 {
+                let pick = |v: u64, frac: (f64, f64)| {
+                    let (c, r) = free[(v % free.len() as u64) as usize];
+                    (c as f64 + frac.0, r as f64 + frac.1)
+                };
+                let frac = [(0.3, 0.6), (0.0, 0.5), (0.0, 0.0), (1.0, 0.25)][t % 4];
+                let (s, goal) = (pick(next(), frac), pick(next(), (0.5, 0.5)));
+                let to_goal = graph.lattice_to(goal, s);
+                let view = StartView::new(&graph, &to_goal, s);
+                for &v in &graph.corners {
+                    let hides = view.hides(&to_goal, v);
+                    if graph.sees(s, v) {
+                        assert!(
+                            !hides,
+                            "case {case}: {s:?} sees {v:?}, the lattice hides it"
+                        );
+                        seen += 1;
+                    } else if hides {
+                        hidden += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            seen > 5_000 && hidden > 1_000,
+            "{seen} seen, {hidden} hidden"
+        );
     }
 
     #[test]
