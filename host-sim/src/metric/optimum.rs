@@ -1965,6 +1965,32 @@ mod tests {
         assert!(corners.shortest(inside, Point::new(8.5, 8.5)).is_some());
     }
 
+    /// A `w` x `h` map (row-major) of `walls` random walls up to `long` cells long and
+    /// `thick` thick, lying either way: rooms of sparse walls.
+    fn sparse_walls(
+        (w, h): (i64, i64),
+        walls: u64,
+        (long, thick): (u64, u64),
+        next: &mut impl FnMut() -> u64,
+    ) -> Vec<bool> {
+        let mut o = vec![false; (w * h) as usize];
+        for _ in 0..walls {
+            let (x, y) = ((next() % w as u64) as i64, (next() % h as u64) as i64);
+            let (bw, bh) = (1 + (next() % long) as i64, 1 + (next() % thick) as i64);
+            let (bw, bh) = if next().is_multiple_of(2) {
+                (bw, bh)
+            } else {
+                (bh, bw)
+            };
+            for r in y..(y + bh).min(h) {
+                for c in x..(x + bw).min(w) {
+                    o[(r * w + c) as usize] = true;
+                }
+            }
+        }
+        o
+    }
+
     /// The shadow casts read rows a word at a time: on maps wider than a word (rooms of
     /// sparse walls, where runs span words, and clutter, where they are short), from corners
     /// and from points on the map's edge, every corner in view is found.
@@ -1975,22 +2001,8 @@ mod tests {
         for case in 0..24 {
             let (w, h) = (60 + (next() % 140) as i64, 60 + (next() % 140) as i64);
             let occ: Vec<bool> = if case % 2 == 0 {
-                let mut o = vec![false; (w * h) as usize];
-                for _ in 0..6 + next() % 10 {
-                    let (x, y) = ((next() % w as u64) as i64, (next() % h as u64) as i64);
-                    let (bw, bh) = (1 + (next() % 30) as i64, 1 + (next() % 4) as i64);
-                    let (bw, bh) = if next().is_multiple_of(2) {
-                        (bw, bh)
-                    } else {
-                        (bh, bw)
-                    };
-                    for r in y..(y + bh).min(h) {
-                        for c in x..(x + bw).min(w) {
-                            o[(r * w + c) as usize] = true;
-                        }
-                    }
-                }
-                o
+                let walls = 6 + next() % 10;
+                sparse_walls((w, h), walls, (30, 4), &mut next)
             } else {
                 (0..w * h).map(|_| next() % 100 < 8).collect()
             };
@@ -2038,22 +2050,8 @@ mod tests {
         for case in 0..60 {
             let (w, h) = (20 + (next() % 100) as i64, 20 + (next() % 100) as i64);
             let occ: Vec<bool> = if case % 2 == 0 {
-                let mut o = vec![false; (w * h) as usize];
-                for _ in 0..4 + next() % 8 {
-                    let (x, y) = ((next() % w as u64) as i64, (next() % h as u64) as i64);
-                    let (bw, bh) = (1 + (next() % 40) as i64, 1 + (next() % 3) as i64);
-                    let (bw, bh) = if next().is_multiple_of(2) {
-                        (bw, bh)
-                    } else {
-                        (bh, bw)
-                    };
-                    for r in y..(y + bh).min(h) {
-                        for c in x..(x + bw).min(w) {
-                            o[(r * w + c) as usize] = true;
-                        }
-                    }
-                }
-                o
+                let walls = 4 + next() % 8;
+                sparse_walls((w, h), walls, (40, 3), &mut next)
             } else {
                 let density = [10, 25, 40][case % 3];
                 (0..w * h).map(|_| next() % 100 < density).collect()
