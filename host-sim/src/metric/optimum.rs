@@ -1150,14 +1150,7 @@ impl Graph {
         // Each entry: a point and its distance when queued.
         let mut buckets: [Vec<(u32, u32)>; NB] = std::array::from_fn(|_| Vec::new());
         let mut queued = 0usize;
-        // The corners of the free cells whose closed square holds a point.
-        let cell_corners = |p: (f64, f64)| -> Vec<(i64, i64)> {
-            cells_holding(p, self.cols, self.rows)
-                .filter(|&(c, r)| !self.occ(c, r))
-                .flat_map(|(c, r)| [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)])
-                .collect()
-        };
-        let mut start_left = cell_corners(s);
+        let mut start_left: Vec<(i64, i64)> = self.lattice_points_of(s).collect();
         start_left.sort_unstable();
         start_left.dedup();
         // The key's heuristic: the lattice's octile distance to the box round the start's
@@ -1167,7 +1160,7 @@ impl Graph {
         // The least key queued: the buckets hold keys from it to it plus `NB` less one (the
         // goal's points are at most a cell apart, their keys within two diagonals).
         let mut f = u32::MAX;
-        for (i, j) in cell_corners(g) {
+        for (i, j) in self.lattice_points_of(g) {
             let p = at(i, j);
             if dist[p] != 0 {
                 dist[p] = 0;
@@ -1266,6 +1259,13 @@ impl Graph {
             cap: None,
             to_start,
         }
+    }
+
+    /// A point's lattice points: the corners of the free cells whose closed square holds it.
+    fn lattice_points_of(&self, p: (f64, f64)) -> impl Iterator<Item = (i64, i64)> + '_ {
+        cells_holding(p, self.cols, self.rows)
+            .filter(|&(c, r)| !self.occ(c, r))
+            .flat_map(|(c, r)| [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)])
     }
 
     /// The plain search (every corner a candidate from every corner, the straight line as
@@ -1441,9 +1441,8 @@ struct StartView {
 
 impl StartView {
     fn new(graph: &Graph, to_goal: &ToGoal, s: (f64, f64)) -> Self {
-        let points = cells_holding(s, graph.cols, graph.rows)
-            .filter(|&(c, r)| !graph.occ(c, r))
-            .flat_map(|(c, r)| [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)])
+        let points = graph
+            .lattice_points_of(s)
             .filter_map(|(i, j)| Some(((i as f64, j as f64), f64::from(to_goal.exact(i, j)?))))
             .collect();
         Self { s, points }
