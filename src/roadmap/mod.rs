@@ -68,16 +68,22 @@ pub const MAX_NODES: usize = u16::MAX as usize - 1;
 const ATTACH_CANDIDATES: usize = 8;
 /// Nodes the root attaches to, at most: the first of its candidates it sees (each tested
 /// before the search opens). The goal's candidates are tested only when a way uses them.
-const ATTACH: usize = 6;
+/// Three, not six: each is a segment test before the search, and more open starts drew the
+/// search wider (house384 leg 1: 51 nodes closed with six, 25 with three); the first paths
+/// were as short or shorter (`docs/notebook/first-solution.md`, twenty-ninth session).
+const ATTACH: usize = 3;
 /// Times an end's candidates are taken again, the next [`ATTACH_CANDIDATES`] nearest, when it
 /// sees none of those it had (an end beside a wall, in a maze whose nearest corners are
 /// behind the walls): up to `ATTACH_CANDIDATES * (1 + WIDEN)` nodes an end.
 const WIDEN: u8 = 3;
-/// The A* heuristic's weight: the straight distance to the goal counts twice, so the search
-/// pops far fewer nodes on a dense roadmap (a map of many small obstacles has 20-40 edges a
-/// node) for a first path at most twice the roadmap's shortest (rewiring shortens it from the
-/// first call on). Measured on the reference and nav2 maps: `docs/notebook/first-solution.md`.
-const WEIGHT: f32 = 2.0;
+/// The A* heuristic's weight: the straight distance to the goal counts 1.5 times, so the
+/// search pops far fewer nodes on a dense roadmap (a map of many small obstacles has 20-40
+/// edges a node) for a first path at most 1.5 times the roadmap's shortest (rewiring shortens
+/// it from the first call on). Weight 2 went greedily into the pockets beside the goal's
+/// direction as often as it saved pops, for first paths 2-8 % longer on the buildings (with
+/// [`ATTACH`] 3; house384, depot, rooms512, city1024). Measured on the reference, nav2 and
+/// generated maps: `docs/notebook/first-solution.md`.
+const WEIGHT: f32 = 1.5;
 const fn pad4(n: usize) -> usize {
     n.saturating_add(3) & !3usize
 }
