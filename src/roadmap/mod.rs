@@ -69,8 +69,8 @@ const ATTACH_CANDIDATES: usize = 8;
 /// Nodes the root attaches to, at most: the first of its candidates it sees (each tested
 /// before the search opens). The goal's candidates are tested only when a way uses them.
 /// Three, not six: each is a segment test before the search, and more open starts drew the
-/// search wider (house384 leg 1: 51 nodes closed with six, 25 with three); the first paths
-/// were as short or shorter (`docs/notebook/first-solution.md`, twenty-ninth session).
+/// search wider (house384 leg 1 closed 51 nodes with six); with [`WEIGHT`] the first paths
+/// were shorter on most maps (`docs/notebook/first-solution.md`, twenty-ninth session).
 const ATTACH: usize = 3;
 /// Times an end's candidates are taken again, the next [`ATTACH_CANDIDATES`] nearest, when it
 /// sees none of those it had (an end beside a wall, in a maze whose nearest corners are
