@@ -14,7 +14,9 @@ use bi_am_rrt::metric::Metric;
 use host_sim::metric::diffusion::TableOptions;
 use host_sim::results::{Goals, Pace, Row};
 use host_sim::scenario::Scenario as HsScenario;
-use host_sim::sim::clock::{ClockKind, CpuClock, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
+use host_sim::sim::clock::{
+    ClockKind, CpuClock, CpuMonoClock, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock,
+};
 use host_sim::sim::{GoalRun, Prepared, drive_each, with_planner};
 use host_sim::study::experiment::{self as exp, Existing, ExperimentArgs};
 use pyo3::prelude::*;
@@ -178,8 +180,9 @@ fn clock_kind(clock: &str) -> PyResult<ClockKind> {
         "virtual" => Ok(ClockKind::Virtual),
         "wall" => Ok(ClockKind::Wall),
         "cpu" => Ok(ClockKind::Cpu),
+        "cpu-mono" => Ok(ClockKind::CpuMono),
         other => Err(value(format!(
-            "clock {other:?}: \"virtual\", \"cpu\" or \"wall\""
+            "clock {other:?}: \"virtual\", \"cpu\", \"cpu-mono\" or \"wall\""
         ))),
     }
 }
@@ -265,6 +268,7 @@ fn drive_run(
     let mut legs: Vec<Vec<Point>> = vec![Vec::new(); prep.scenario.goals.len()];
     let wall = WallClock::new();
     let cpu = CpuClock::new();
+    let cpu_mono = CpuMonoClock::new();
     let virt = virtual_clock(VIRTUAL_NS_PER_UNIT);
     let t_exp_ticks = virt.ticks(cfg.cfg.budget.t_exp);
     let mut call_end = 0u64;
@@ -289,6 +293,9 @@ fn drive_run(
         let runs: Vec<GoalRun> = match kind {
             ClockKind::Wall => drive_each(p, prep, &wall, &goals, &protocol, hook, |_| {})?,
             ClockKind::Cpu => drive_each(p, prep, &cpu, &goals, &protocol, hook, |_| {})?,
+            ClockKind::CpuMono => {
+                drive_each(p, prep, &cpu_mono, &goals, &protocol, hook, |_| {})?
+            }
             ClockKind::Virtual => drive_each(p, prep, &virt, &goals, &protocol, hook, |_| {})?,
         };
         Ok((runs, p.tree().len()))

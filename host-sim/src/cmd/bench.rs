@@ -37,11 +37,14 @@ pub struct Cmd {
     /// `benches/ompl` harness binary (see its README; needs libompl-dev).
     #[arg(long)]
     ompl: Option<PathBuf>,
-    /// The planners' clock, as every command names it: `cpu` (thread CPU time), `wall` (the
-    /// monotonic clock: cheaper to read, at least the CPU time; `steady` is the old
-    /// spelling) or `virtual` (work units, repeatable: for comparing algorithmic changes; its
-    /// "us" are virtual).
-    #[arg(long, value_enum, default_value = "cpu")]
+    /// The planners' clock, as every command names it: `cpu-mono` (the default: thread CPU
+    /// time, read by a system call at most once a millisecond and between those readings
+    /// advanced by the monotonic clock, so that each of the planner's readings costs what a
+    /// robot's or OMPL's does, about 30 ns), `cpu` (thread CPU time, a system call of
+    /// 0.4-0.8 us at every reading: the default before 2026-11-29), `wall` (the monotonic
+    /// clock: at least the CPU time; `steady` is the old spelling) or `virtual` (work units,
+    /// repeatable: for comparing algorithmic changes; its "us" are virtual).
+    #[arg(long, value_enum, default_value = "cpu-mono")]
     clock: host_sim::study::bench::BenchClock,
     #[command(flatten)]
     fidelity: crate::args::FidelityArgs,

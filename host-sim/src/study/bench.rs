@@ -1,5 +1,6 @@
 //! The planner benchmark: every leg of a scenario, a fresh planner at the leg's start, the
-//! thread's CPU time as the planner's clock, N seeds per planner. Measured per run: CPU time
+//! thread's CPU time as the measure (read cheaply by the planner: [`CpuMonoClock`]), N seeds
+//! per planner. Measured per run: CPU time
 //! from `set_goal` to the goal joining the tree and the length of that first path, the tree's
 //! path cost after fixed CPU budgets (default 0.01, 0.1 and 1 s), nodes, expansions per second
 //! and clock readings per expansion. Lengths are divided by the leg's exact optimum
@@ -27,7 +28,7 @@ use crate::metric::optimum::leg_starts;
 use crate::results::stats::median;
 use crate::results::table::{Cell, Column, Table};
 use crate::scenario::Scenario;
-use crate::sim::clock::{CpuClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
+use crate::sim::clock::{CpuClock, CpuMonoClock, VIRTUAL_NS_PER_UNIT, virtual_clock};
 use crate::sim::planners::Variant;
 use crate::sim::{BUCKETS, Prepared, SizedPlanner, with_planner_in};
 use bi_am_rrt::Storage;
@@ -52,7 +53,8 @@ pub struct BenchArgs {
     pub table: crate::metric::diffusion::TableOptions,
     /// OMPL's RRT-Connect harness (`benches/ompl`), run on every leg beside our planners.
     pub ompl: Option<PathBuf>,
-    /// The planners' clock: thread CPU time, or the virtual clock (work units at
+    /// The planners' clock: thread CPU time (read cheaply, or a system call at every
+    /// reading), the monotonic clock, or the virtual clock (work units at
     /// [`VIRTUAL_NS_PER_UNIT`] ns each: repeatable figures for comparing algorithmic changes,
     /// blind to how fast a unit of work runs).
     pub clock: BenchClock,
@@ -87,14 +89,17 @@ pub fn flush_caches() {
     std::hint::black_box(sum);
 }
 
-/// A bench run's clock: [`crate::sim::clock::ClockKind`] (`cpu`, the default; `wall`, the monotonic clock, a
-/// vDSO read of about 20 ns where thread CPU time is a system call of about 0.4 us, and the
-/// clock OMPL's timed termination condition reads in its loop; `virtual`).
+/// A bench run's clock: [`crate::sim::clock::ClockKind`] (`cpu-mono`, the default: thread CPU
+/// time as the measurement, the planner's readings as cheap as the monotonic clock's,
+/// [`CpuMonoClock`]; `cpu`, a thread CPU time system call of about 0.4-0.8 us at every reading;
+/// `wall`, the monotonic clock, a vDSO read of about 30 ns and the clock OMPL's timed
+/// termination condition reads in its loop; `virtual`).
 pub type BenchClock = crate::sim::clock::ClockKind;
 
 /// A bench run's clock, counting its readings.
 enum RunClock {
     Cpu(CpuClock),
+    CpuMono(CpuMonoClock),
     Steady(std::time::Instant, std::cell::Cell<u64>),
     Virtual(bi_am_rrt::clock::FakeClock, std::cell::Cell<u64>),
 }
@@ -103,6 +108,7 @@ impl RunClock {
     fn new(kind: BenchClock) -> Self {
         match kind {
             BenchClock::Cpu => Self::Cpu(CpuClock::new()),
+            BenchClock::CpuMono => Self::CpuMono(CpuMonoClock::new()),
             BenchClock::Wall => Self::Steady(std::time::Instant::now(), std::cell::Cell::new(0)),
             BenchClock::Virtual => {
                 Self::Virtual(virtual_clock(VIRTUAL_NS_PER_UNIT), std::cell::Cell::new(0))
@@ -113,6 +119,7 @@ impl RunClock {
     fn reads(&self) -> u64 {
         match self {
             Self::Cpu(c) => c.reads(),
+            Self::CpuMono(c) => c.reads(),
             Self::Steady(_, r) | Self::Virtual(_, r) => r.get(),
         }
     }
@@ -122,6 +129,7 @@ impl bi_am_rrt::clock::Clock for RunClock {
     fn now(&self) -> u64 {
         match self {
             Self::Cpu(c) => c.now(),
+            Self::CpuMono(c) => c.now(),
             Self::Steady(t, r) => {
                 r.set(r.get() + 1);
                 t.elapsed().as_nanos() as u64
@@ -187,7 +195,8 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
             .join(" "),
         seeds: args.seeds,
         budgets: args.budgets.clone(),
-        clock: format!("{:?}", args.clock).to_lowercase(),
+        clock: clap::ValueEnum::to_possible_value(&args.clock)
+            .map_or_else(|| format!("{:?}", args.clock), |v| v.get_name().to_string()),
         cold: args.cold,
         until_first: args.until_first,
         grid: args.grid,
@@ -331,6 +340,21 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
 /// the bench's page ([`report`]).
 pub const SETTINGS_FILE: &str = "bench.json";
 
+/// How a report names a bench's clock (`bench.json`'s `clock`).
+fn clock_words(clock: &str) -> String {
+    match clock {
+        "cpu" => "thread CPU time, a system call at each of the planner's clock readings \
+                  (`--clock cpu`, the bench's default until 2026-11-29)"
+            .to_string(),
+        "cpu-mono" => "thread CPU time, the planner's readings advanced by the monotonic clock \
+                       between system calls at most 1 ms apart (`--clock cpu-mono`)"
+            .to_string(),
+        "wall" => "the monotonic clock (`--clock wall`)".to_string(),
+        "virtual" => "the virtual clock (work units; `--clock virtual`)".to_string(),
+        other => format!("{other} clock"),
+    }
+}
+
 /// What a bench ran with (`bench.json`).
 #[derive(Serialize, Deserialize)]
 pub struct BenchSettings {
@@ -340,7 +364,7 @@ pub struct BenchSettings {
     pub seeds: u64,
     /// The CPU budgets at which costs were read, in seconds.
     pub budgets: Vec<f64>,
-    /// The planners' clock (`cpu`, `wall` or `virtual`).
+    /// The planners' clock (`cpu-mono`, `cpu`, `wall` or `virtual`).
     pub clock: String,
     /// Caches flushed before every measured query (the default) or not (`--warm`).
     pub cold: bool,
@@ -423,12 +447,12 @@ pub fn report(dir: &std::path::Path, command: &str, notes: Option<&str>) -> Resu
     }
     let mut md = format!(
         "# Against the baselines: {}\n\n<!-- Made by `{command}` from bench.csv and bench.json: \
-         regenerate it, do not edit. -->\n\nThe bench (`{}`): {} seeds a leg, {} clock, {}{} \
+         regenerate it, do not edit. -->\n\nThe bench (`{}`): {} seeds a leg, {}, {}{} \
          {} s.\n\n",
         maps.join(", "),
         settings.command,
         settings.seeds,
-        settings.clock,
+        clock_words(&settings.clock),
         if settings.cold {
             "cold queries (caches flushed before each)"
         } else {

@@ -193,6 +193,13 @@ pub fn one_run(
                     track(p, gi, a, clock.now() as f64 / hz)
                 })?
             }
+            ClockKind::CpuMono => {
+                let clock = crate::sim::clock::CpuMonoClock::new();
+                let hz = clock.ticks_per_second() as f64;
+                drive(p, prep, &clock, &goals, &protocol, |p, gi, a, _| {
+                    track(p, gi, a, clock.now() as f64 / hz)
+                })?
+            }
             ClockKind::Virtual => {
                 let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
                 let hz = clock.ticks_per_second() as f64;
@@ -222,6 +229,7 @@ pub fn one_run(
             let progress = match args.clock {
                 ClockKind::Wall => p.grow(&WallClock::new()),
                 ClockKind::Cpu => p.grow(&crate::sim::clock::CpuClock::new()),
+                ClockKind::CpuMono => p.grow(&crate::sim::clock::CpuMonoClock::new()),
                 ClockKind::Virtual => p.grow(&virtual_clock(VIRTUAL_NS_PER_UNIT)),
             };
             Ok(progress.goal_cost.filter(|c| !c.blocked).map(|c| c.length))

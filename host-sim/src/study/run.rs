@@ -188,10 +188,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let mut avoided_drawn = false;
     let wall_clock = WallClock::new();
     let cpu_clock = crate::sim::clock::CpuClock::new();
+    let cpu_mono_clock = crate::sim::clock::CpuMonoClock::new();
     let virtual_clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
     let now_s = || match args.clock {
         ClockKind::Wall => wall_clock.now() as f64 / wall_clock.ticks_per_second() as f64,
         ClockKind::Cpu => cpu_clock.now() as f64 / cpu_clock.ticks_per_second() as f64,
+        ClockKind::CpuMono => cpu_mono_clock.now() as f64 / 1e9,
         ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
     };
     let leg_starts = crate::metric::optimum::leg_starts(&prep.scenario);
@@ -354,6 +356,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let runs: Vec<GoalRun> = match args.clock {
             ClockKind::Wall => drive_each(p, &prep, &wall_clock, &goals, &protocol, hook, on_goal)?,
             ClockKind::Cpu => drive_each(p, &prep, &cpu_clock, &goals, &protocol, hook, on_goal)?,
+            ClockKind::CpuMono => {
+                drive_each(p, &prep, &cpu_mono_clock, &goals, &protocol, hook, on_goal)?
+            }
             ClockKind::Virtual => {
                 drive_each(p, &prep, &virtual_clock, &goals, &protocol, hook, on_goal)?
             }
