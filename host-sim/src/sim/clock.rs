@@ -241,9 +241,9 @@ mod tests {
         while made.elapsed() < std::time::Duration::from_millis(5) {
             i += 1;
             x = x.wrapping_mul(6364136223846793005).wrapping_add(i);
-            if i % 500 == 0 {
+            if i.is_multiple_of(500) {
                 let cpu = (cpu_time::ThreadTime::now().as_duration() - clock.start).as_nanos();
-                let t = if i % 100_000 == 0 {
+                let t = if i.is_multiple_of(100_000) {
                     asked += 1;
                     clock.resync()
                 } else {
