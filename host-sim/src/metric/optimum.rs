@@ -158,7 +158,7 @@ impl Corners {
             *o |= u != LIVE;
         }
         Self {
-            filled: Graph::new(grid, occupied),
+            filled: Graph::new(grid, &occupied),
             up,
             all,
         }
@@ -314,17 +314,17 @@ struct Graph {
     cols: i64,
     rows: i64,
     cell: f64,
-    occupied: Vec<bool>,
     /// The grid's packed cells: the core's segment test, a fast conservative first look
     /// (on the map before the fill: a straight segment between two points outside a dead end
     /// never crosses one, it would go in and out over the one side it opens onto).
     bits: Vec<u8>,
-    /// Corner positions in cell units.
-    corners: Vec<(f64, f64)>,
+    /// Corner positions (lattice points, in cell units), in the lattice's row-major order.
+    corners: Vec<(u16, u16)>,
     /// Per corner, the diagonal direction (x, y in {-1, 1}) of its one occupied cell.
-    quadrant: Vec<(f64, f64)>,
-    /// Per lattice point (row-major, `cols + 1` a row), 1 + its corner's number (0: none).
-    index: Vec<u32>,
+    quadrant: Vec<(i8, i8)>,
+    /// Per word of the corners' row-major bits ([`CastRows::corners`]), the corners before
+    /// it: a corner's number is its rank.
+    rank: Vec<u32>,
     /// Per lattice point, its lattice steps (`lattice_to`): bit k for the k-th of right,
     /// left, down, up (beside a free cell or the map's edge), down-right, up-left, up-right,
     /// down-left (across a free cell).
@@ -422,141 +422,148 @@ fn each_one(words: &[u64], from: usize, to: usize, mut f: impl FnMut(usize)) {
     }
 }
 
+/// Whether lattice point `(i, j)` (inside the map) is a convex corner (one occupied cell of
+/// the four around it, as `occ` tells), and that cell's diagonal direction from it.
+fn corner_of(occ: impl Fn(i64, i64) -> bool, i: i64, j: i64) -> Option<(f64, f64)> {
+    // Cells around lattice point (i, j): NW, NE, SW, SE.
+    let (a, b, c, d) = (occ(i - 1, j - 1), occ(i, j - 1), occ(i - 1, j), occ(i, j));
+    let n = [a, b, c, d].iter().filter(|&&o| o).count();
+    (n == 1).then(|| match (a, b, c) {
+        (true, _, _) => (-1.0, -1.0),
+        (_, true, _) => (1.0, -1.0),
+        (_, _, true) => (-1.0, 1.0),
+        _ => (1.0, 1.0),
+    })
+}
+
+/// Lattice point `(i, j)`'s steps ([`Graph::steps`]) on a map whose cells `occ` tells.
+fn steps_of(occ: impl Fn(i64, i64) -> bool, (cols, rows): (i64, i64), i: i64, j: i64) -> u8 {
+    // Free cells around (i, j), outside the map counting as free (as in `sees`).
+    let (nw, ne, sw, se) = (
+        !occ(i - 1, j - 1),
+        !occ(i, j - 1),
+        !occ(i - 1, j),
+        !occ(i, j),
+    );
+    let (r, l, d, u) = (i < cols, i > 0, j < rows, j > 0);
+    let bits = [
+        r && (ne || se),
+        l && (nw || sw),
+        d && (sw || se),
+        u && (nw || ne),
+        r && d && se,
+        l && u && nw,
+        r && u && ne,
+        l && d && sw,
+    ];
+    bits.iter()
+        .enumerate()
+        .fold(0u8, |m, (k, &b)| m | (u8::from(b) << k))
+}
+
 impl Graph {
     /// The corners of `grid` with its cells `occupied` (row-major).
-    fn new(grid: &OccupancyGrid<'_>, occupied: Vec<bool>) -> Self {
+    fn new(grid: &OccupancyGrid<'_>, occupied: &[bool]) -> Self {
         let (cols, rows) = (grid.cols() as i64, grid.rows() as i64);
         let mut me = Self {
             cols,
             rows,
             cell: grid.cell_size() as f64,
-            cast: CastRows::of(&occupied, cols as usize, rows as usize),
-            occupied,
+            cast: CastRows::of(occupied, cols as usize, rows as usize),
             bits: grid.bits().to_vec(),
             corners: Vec::new(),
             quadrant: Vec::new(),
-            index: vec![0; ((cols + 1) * (rows + 1)) as usize],
+            rank: Vec::new(),
             steps: vec![0; ((cols + 1) * (rows + 1)) as usize],
+        };
+        // From the cells as given (a byte a cell: faster to read than the bit rows).
+        let occ = |c: i64, r: i64| {
+            c >= 0 && r >= 0 && c < cols && r < rows && occupied[(r * cols + c) as usize]
         };
         for j in 1..rows {
             for i in 1..cols {
-                if let Some(q) = me.corner_at(i, j) {
-                    me.corners.push((i as f64, j as f64));
-                    me.quadrant.push(q);
+                if corner_of(occ, i, j).is_some() {
+                    me.cast.mark((cols, rows), (i, j), true);
                 }
             }
         }
-        for (k, &(x, y)) in me.corners.iter().enumerate() {
-            me.index[(y as i64 * (cols + 1) + x as i64) as usize] = k as u32 + 1;
-            me.cast.mark((cols, rows), (x as i64, y as i64), true);
-        }
+        me.number_corners();
         for j in 0..=rows {
             for i in 0..=cols {
-                me.steps[(j * (cols + 1) + i) as usize] = me.steps_at(i, j);
+                me.steps[(j * (cols + 1) + i) as usize] = steps_of(occ, (cols, rows), i, j);
             }
         }
         me
     }
 
-    /// Whether lattice point `(i, j)` (inside the map) is a convex corner (one occupied cell of
-    /// the four around it), and that cell's diagonal direction from it.
+    /// Whether lattice point `(i, j)` (inside the map) is a convex corner, and its cell's
+    /// diagonal direction ([`corner_of`]).
     fn corner_at(&self, i: i64, j: i64) -> Option<(f64, f64)> {
-        // Cells around lattice point (i, j): NW, NE, SW, SE.
-        let (a, b, c, d) = (
-            self.occ(i - 1, j - 1),
-            self.occ(i, j - 1),
-            self.occ(i - 1, j),
-            self.occ(i, j),
-        );
-        let n = [a, b, c, d].iter().filter(|&&o| o).count();
-        (n == 1).then(|| match (a, b, c) {
-            (true, _, _) => (-1.0, -1.0),
-            (_, true, _) => (1.0, -1.0),
-            (_, _, true) => (-1.0, 1.0),
-            _ => (1.0, 1.0),
-        })
+        corner_of(|c, r| self.occ(c, r), i, j)
     }
 
-    /// Lattice point `(i, j)`'s steps ([`Self::steps`]).
+    /// Lattice point `(i, j)`'s steps ([`Self::steps`], [`steps_of`]).
     fn steps_at(&self, i: i64, j: i64) -> u8 {
-        // Free cells around (i, j), outside the map counting as free (as in `sees`).
-        let (nw, ne, sw, se) = (
-            !self.occ(i - 1, j - 1),
-            !self.occ(i, j - 1),
-            !self.occ(i - 1, j),
-            !self.occ(i, j),
-        );
-        let (r, l, d, u) = (i < self.cols, i > 0, j < self.rows, j > 0);
-        let bits = [
-            r && (ne || se),
-            l && (nw || sw),
-            d && (sw || se),
-            u && (nw || ne),
-            r && d && se,
-            l && u && nw,
-            r && u && ne,
-            l && d && sw,
-        ];
-        bits.iter()
-            .enumerate()
-            .fold(0u8, |m, (k, &b)| m | (u8::from(b) << k))
+        steps_of(|c, r| self.occ(c, r), (self.cols, self.rows), i, j)
     }
 
     /// The graph with `cells` (row-major indices) free: their corners' marks and steps
-    /// recomputed, corners that are no more dropped and new ones added.
+    /// recomputed, and the corners numbered again.
     fn open(&mut self, cells: &[usize]) {
         let w = self.cols + 1;
         let size = (self.cols, self.rows);
         let at = |k: usize| ((k as i64) % self.cols, (k as i64) / self.cols);
         for &k in cells {
-            self.occupied[k] = false;
             self.cast.free(size, at(k));
         }
         // Each lattice point once (a leg opens a corridor's cells, each point shared by up to
         // four of them).
-        let mut met: BitVec<u64> = BitVec::repeat(false, self.index.len());
+        let mut met: BitVec<u64> = BitVec::repeat(false, self.steps.len());
         let points = cells.iter().flat_map(|&k| {
             let (c, r) = at(k);
             [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)]
         });
-        let mut dropped = false;
         for (i, j) in points {
-            if met.replace((j * w + i) as usize, true) {
+            let p = (j * w + i) as usize;
+            if met.replace(p, true) {
                 continue;
             }
-            let p = (j * w + i) as usize;
             self.steps[p] = self.steps_at(i, j);
             let inner = i > 0 && j > 0 && i < self.cols && j < self.rows;
-            let now = if inner { self.corner_at(i, j) } else { None };
-            match (self.index[p], now) {
-                (0, Some(q)) => {
-                    self.corners.push((i as f64, j as f64));
-                    self.quadrant.push(q);
-                    self.index[p] = self.corners.len() as u32;
-                    self.cast.mark(size, (i, j), true);
-                }
-                (k @ 1.., Some(q)) => self.quadrant[k as usize - 1] = q,
-                (k @ 1.., None) => {
-                    // Marked off the map, dropped below.
-                    self.corners[k as usize - 1] = (-1.0, -1.0);
-                    self.index[p] = 0;
-                    self.cast.mark(size, (i, j), false);
-                    dropped = true;
-                }
-                (0, None) => {}
+            let corner = inner && self.corner_at(i, j).is_some();
+            self.cast.mark(size, (i, j), corner);
+        }
+        self.number_corners();
+    }
+
+    /// The corners' positions, quadrants and numbers from their bits, in row-major order.
+    fn number_corners(&mut self) {
+        let bits = self.cast.corners[0].as_raw_slice();
+        let w = (self.cols + 1) as usize;
+        self.corners.clear();
+        self.quadrant.clear();
+        self.rank.clear();
+        for (k, &word) in bits.iter().enumerate() {
+            self.rank.push(self.corners.len() as u32);
+            let mut m = word;
+            while m != 0 {
+                let p = k * 64 + m.trailing_zeros() as usize;
+                m &= m - 1;
+                let (i, j) = ((p % w) as i64, (p / w) as i64);
+                // A corner's bit is set where `corner_at` finds one (`new`, `open`).
+                let q = self.corner_at(i, j).unwrap_or_default();
+                debug_assert!(q != (0.0, 0.0), "({i}, {j}) marked a corner");
+                self.corners.push((i as u16, j as u16));
+                self.quadrant.push((q.0 as i8, q.1 as i8));
             }
         }
-        if dropped {
-            (self.corners, self.quadrant) = self
-                .corners
-                .iter()
-                .zip(&self.quadrant)
-                .filter(|(p, _)| p.0 >= 0.0)
-                .unzip();
-            for (k, &(x, y)) in self.corners.iter().enumerate() {
-                self.index[(y as i64 * w + x as i64) as usize] = k as u32 + 1;
-            }
-        }
+    }
+
+    /// The number of the corner at lattice point `(i, j)`, a corner.
+    fn corner_number(&self, i: i64, j: i64) -> usize {
+        let p = (j * (self.cols + 1) + i) as usize;
+        let below = self.cast.corners[0].as_raw_slice()[p / 64] & ((1u64 << (p % 64)) - 1);
+        self.rank[p / 64] as usize + below.count_ones() as usize
     }
 
     /// Number of corners.
@@ -565,11 +572,23 @@ impl Graph {
     }
 
     fn occ(&self, c: i64, r: i64) -> bool {
-        c >= 0
-            && r >= 0
-            && c < self.cols
-            && r < self.rows
-            && self.occupied[(r * self.cols + c) as usize]
+        if c < 0 || r < 0 || c >= self.cols || r >= self.rows {
+            return false;
+        }
+        let k = (r * self.cols + c) as usize;
+        self.cast.occ[0].as_raw_slice()[k / 64] >> (k % 64) & 1 != 0
+    }
+
+    /// Corner `k`'s position, in cell units.
+    fn corner(&self, k: usize) -> (f64, f64) {
+        let (i, j) = self.corners[k];
+        (f64::from(i), f64::from(j))
+    }
+
+    /// The diagonal direction of corner `k`'s occupied cell.
+    fn quad(&self, k: usize) -> (f64, f64) {
+        let (x, y) = self.quadrant[k];
+        (f64::from(x), f64::from(y))
     }
 
     /// Whether the segment between two points (cell units) stays out of the obstacles'
@@ -780,20 +799,20 @@ impl Graph {
         // The heuristic (`lattice_to`): the straight line or the lattice's distance over its
         // stretch less the goal cell's half diagonal, whichever is longer; infinite where the
         // lattice does not reach (nor does any path).
-        let h: Vec<f64> =
-            self.corners
-                .iter()
-                .map(|&p| match to_goal.at(p.0 as i64, p.1 as i64) {
+        let h: Vec<f64> = (0..self.len())
+            .map(|k| {
+                let p = self.corner(k);
+                match to_goal.at(p.0 as i64, p.1 as i64) {
                     u32::MAX => f64::INFINITY,
                     d => dist(p, g)
                         .max(f64::from(d) / LATTICE_UNIT / LATTICE_STRETCH - GOAL_CELL - 1e-9),
-                })
-                .collect();
+                }
+            })
+            .collect();
         // Nodes: the corners, then the goal, then the start.
         let n = self.corners.len();
-        let (cand, quad) = (&self.corners, &self.quadrant);
         let pos = |i: usize| match i.cmp(&n) {
-            Ordering::Less => cand[i],
+            Ordering::Less => self.corner(i),
             Ordering::Equal => g,
             Ordering::Greater => s,
         };
@@ -845,7 +864,7 @@ impl Graph {
             // the way back and the way on enclose that cell's diagonal (module docs).
             let back = (u < n).then(|| {
                 let pp = pos(parent[u]);
-                ((pp.0 - pu.0, pp.1 - pu.1), quad[u])
+                ((pp.0 - pu.0, pp.1 - pu.1), self.quad(u))
             });
             // The corners in view of a corner, when the shadows find them sooner than a
             // scan of every corner would; else every corner (and always the goal).
@@ -900,7 +919,10 @@ impl Graph {
                 // (its cell straight ahead: no taut way on from there).
                 if c < best[v]
                     && c + hv(v) < best[n]
-                    && (v == n || d.0 * quad[v].0 <= 0.0 || d.1 * quad[v].1 <= 0.0)
+                    && (v == n || {
+                        let q = self.quad(v);
+                        d.0 * q.0 <= 0.0 || d.1 * q.1 <= 0.0
+                    })
                     && back.is_none_or(|(a, w)| taut(a, d, w))
                 {
                     if u == n + 1 && v < n && start_view.hides(&to_goal, pv) {
@@ -1104,8 +1126,7 @@ impl Graph {
                                     } else {
                                         (point_line(y), base + x)
                                     };
-                                    let k = self.index[(j * (self.cols + 1) + i) as usize];
-                                    found(k as usize - 1);
+                                    found(self.corner_number(i, j));
                                 });
                             }
                         }
@@ -1147,8 +1168,10 @@ impl Graph {
         let mut dist = vec![u32::MAX; (w * (self.rows + 1)) as usize];
         const NB: usize = 256;
         const _: () = assert!(2 * DIAG_DOWN as usize <= NB && (LATTICE_UNIT as usize) < NB);
-        // Each entry: a point and its distance when queued.
+        // Each entry: a point (`j << 16 | i`: its row and column, so that no division finds
+        // them; a map has at most 4,096 cells a side) and its distance when queued.
         let mut buckets: [Vec<(u32, u32)>; NB] = std::array::from_fn(|_| Vec::new());
+        let pack = |i: i64, j: i64| ((j as u32) << 16) | i as u32;
         let mut queued = 0usize;
         let mut start_left: Vec<(i64, i64)> = self.lattice_points_of(s).collect();
         start_left.sort_unstable();
@@ -1166,7 +1189,7 @@ impl Graph {
                 dist[p] = 0;
                 let key = to_start.at(i, j);
                 f = f.min(key);
-                buckets[key as usize & (NB - 1)].push((p as u32, 0));
+                buckets[key as usize & (NB - 1)].push((pack(i, j), 0));
                 queued += 1;
             }
         }
@@ -1217,8 +1240,9 @@ impl Graph {
                     break;
                 }
                 queued -= settling.len();
-                for &(u, d) in &settling {
-                    let u = u as usize;
+                for &(ij, d) in &settling {
+                    let (i, j) = (i64::from(ij & 0xffff), i64::from(ij >> 16));
+                    let u = at(i, j);
                     // A point whose distance fell since it was queued is settled from its
                     // later entry.
                     if dist[u] != d {
@@ -1231,7 +1255,6 @@ impl Graph {
                             stop = Some(far.ceil().min(f64::from(u32::MAX / 4)) as u32);
                         }
                     }
-                    let (i, j) = ((u as i64) % w, (u as i64) / w);
                     let mut m = self.steps[u];
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
@@ -1240,8 +1263,9 @@ impl Graph {
                         let c = d + length[k];
                         if c < dist[v] {
                             dist[v] = c;
-                            let key = c + to_start.at(i + step[k].0, j + step[k].1);
-                            buckets[key as usize & (NB - 1)].push((v as u32, c));
+                            let (vi, vj) = (i + step[k].0, j + step[k].1);
+                            let key = c + to_start.at(vi, vj);
+                            buckets[key as usize & (NB - 1)].push((pack(vi, vj), c));
                             queued += 1;
                         }
                     }
@@ -1282,7 +1306,7 @@ impl Graph {
         }
         let n = self.corners.len();
         let pos = |i: usize| match i.cmp(&n) {
-            Ordering::Less => self.corners[i],
+            Ordering::Less => self.corner(i),
             Ordering::Equal => g,
             Ordering::Greater => s,
         };
@@ -2009,14 +2033,14 @@ mod tests {
                 occ[usize::from(r) * w as usize + usize::from(c)]
             })
             .unwrap();
-            let graph = Graph::new(&g.grid(), occ.clone());
+            let graph = Graph::new(&g.grid(), &occ);
             let n = graph.len();
             for t in 0..12 {
                 let o = if t % 4 == 3 {
                     (0, (next() % (h as u64 + 1)) as i64)
                 } else if n > 0 {
                     let p = graph.corners[(next() % n as u64) as usize];
-                    (p.0 as i64, p.1 as i64)
+                    (i64::from(p.0), i64::from(p.1))
                 } else {
                     continue;
                 };
@@ -2027,7 +2051,8 @@ mod tests {
                     graph.lattice_in_view(o, depth, usize::MAX, &[], &mut |k| found[k] = true);
                 assert!(cast.is_some());
                 let p = (o.0 as f64, o.1 as f64);
-                for (k, &q) in graph.corners.iter().enumerate() {
+                for k in 0..n {
+                    let q = graph.corner(k);
                     let far = ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt();
                     if q != p && far <= (depth - 1) as f64 && graph.sees(p, q) {
                         assert!(found[k], "case {case}: {q:?} sees {p:?} but was not cast");
@@ -2060,7 +2085,7 @@ mod tests {
                 occ[usize::from(r) * w as usize + usize::from(c)]
             })
             .unwrap();
-            let graph = Graph::new(&g.grid(), occ.clone());
+            let graph = Graph::new(&g.grid(), &occ);
             let free: Vec<(i64, i64)> = (0..h)
                 .flat_map(|r| (0..w).map(move |c| (c, r)))
                 .filter(|&(c, r)| !occ[(r * w + c) as usize])
@@ -2077,7 +2102,8 @@ mod tests {
                 let (s, goal) = (pick(next(), frac), pick(next(), (0.5, 0.5)));
                 let to_goal = graph.lattice_to(goal, s);
                 let view = StartView::new(&graph, &to_goal, s);
-                for &v in &graph.corners {
+                for k in 0..graph.len() {
+                    let v = graph.corner(k);
                     let hides = view.hides(&to_goal, v);
                     if graph.sees(s, v) {
                         assert!(
