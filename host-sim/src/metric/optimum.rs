@@ -2051,11 +2051,11 @@ mod tests {
                     graph.lattice_in_view(o, depth, usize::MAX, &[], &mut |k| found[k] = true);
                 assert!(cast.is_some());
                 let p = (o.0 as f64, o.1 as f64);
-                for k in 0..n {
+                for (k, &was_found) in found.iter().enumerate() {
                     let q = graph.corner(k);
                     let far = ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt();
                     if q != p && far <= (depth - 1) as f64 && graph.sees(p, q) {
-                        assert!(found[k], "case {case}: {q:?} sees {p:?} but was not cast");
+                        assert!(was_found, "case {case}: {q:?} sees {p:?} but was not cast");
                         checked += 1;
                     }
                 }
