@@ -167,19 +167,52 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
     let p = narrow[0].1;
     assert!(p.narrow_m > 0.6 * p.length_m, "{p:?}");
     assert_eq!(p.median_width_m, 1.0);
-    let w = host_sim::sim::narrow_warning(0, &p, e_max, "within the leg's 4000 calls", None);
+    let w = host_sim::sim::narrow_warning(
+        0,
+        &p,
+        e_max,
+        "within the leg's 4000 calls",
+        None,
+        host_sim::sim::NODES,
+    );
     assert!(
         w.starts_with("leg 1: ") && w.contains("median width 1.00 m"),
         "{w}"
     );
     // With the exact path's pieces: the nodes a tree path needs, against both trees.
-    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(700));
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(700), host_sim::sim::NODES);
     assert!(
         w.contains("700 straight pieces") && !w.contains("more than"),
         "{w}"
     );
-    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(20_000));
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(20_000), host_sim::sim::NODES);
     assert!(w.contains("more than they can hold"), "{w}");
+    // The arena the run has, not the simulator's default: 700 pieces overflow two trees of
+    // 256 nodes.
+    let w = host_sim::sim::narrow_warning(0, &p, e_max, "", Some(700), 256);
+    assert!(w.contains("hold 256 each: more than"), "{w}");
+    // The tuned set has the roadmap: its first path comes from it, a note; an arena too small
+    // for the roadmap leaves it out, which is said with the arena it needs, and the leg's
+    // warning follows (`bench --nodes 2048` on a maze whose roadmap has 2,866 nodes said
+    // the first path came from the roadmap and then planned without it).
+    let fitted = prep.fit(tuned);
+    let rm = prep.roadmap().expect("the maze's roadmap").nodes;
+    let all = |_: usize| Some("within 1 s".to_string());
+    let notes = prep.narrow_notes(fitted, rm + 1, &all);
+    assert!(
+        notes.len() == 1 && notes[0].starts_with("note: ") && notes[0].contains("roadmap"),
+        "{notes:?}"
+    );
+    let notes = prep.narrow_notes(fitted, rm, &all);
+    assert_eq!(notes.len(), 2, "{notes:?}");
+    assert!(
+        notes[0].contains(&format!("an arena of {} nodes or more", rm + 1)),
+        "{notes:?}"
+    );
+    assert!(
+        notes[1].contains(&format!("leg 1: ")) && notes[1].contains(&format!("hold {rm} each")),
+        "{notes:?}"
+    );
     // A maze of 8 m corridors in 1 m cells (256 m across): wider than e_max / 4.
     let wide = maze(16, 7);
     let wide = Scenario {

@@ -123,9 +123,13 @@ impl Prepared {
         let attached = self.roadmap().and_then(|b| {
             let rm = bi_am_rrt::roadmap::Roadmap::from_bytes(&b.bytes)
                 .map_err(|e| anyhow!("roadmap: {e}"))?;
-            planner
-                .set_roadmap(Some(rm))
-                .map_err(|e| anyhow!("roadmap of {} nodes: {e}", b.nodes))
+            planner.set_roadmap(Some(rm)).map_err(|e| {
+                anyhow!(
+                    "roadmap of {} nodes: {e}; the arena holds {N} a tree, it needs {} or more",
+                    b.nodes,
+                    b.nodes + 1
+                )
+            })
         });
         if let Err(e) = attached
             && !self
@@ -216,41 +220,79 @@ impl Prepared {
             .collect()
     }
 
-    /// Prints [`narrow_warning`] to stderr for each of [`Prepared::narrow_legs`] with `cfg`'s
-    /// lengths (the configuration a run gets here, fitted: [`Prepared::config`]); `budget(k)` says what the planner has for leg `k` (`None`:
-    /// the leg is not run).
-    pub fn warn_narrow_legs(&self, cfg: Named, budget: &dyn Fn(usize) -> Option<String>) {
+    /// Prints [`Prepared::narrow_notes`] to stderr.
+    pub fn warn_narrow_legs(
+        &self,
+        cfg: Named,
+        nodes: usize,
+        budget: &dyn Fn(usize) -> Option<String>,
+    ) {
+        for line in self.narrow_notes(cfg, nodes, budget) {
+            eprintln!("{line}");
+        }
+    }
+
+    /// What a run says before it starts of [`Prepared::narrow_legs`] with `cfg`'s lengths
+    /// (the configuration a run gets here, fitted: [`Prepared::config`]) and an arena of
+    /// `nodes` a tree: a [`narrow_warning`] for each leg; `budget(k)` says what the planner
+    /// has for leg `k` (`None`: the leg is not run). With the scenario's roadmap, a note
+    /// instead (the first path comes from it), unless the arena cannot hold the roadmap: then
+    /// a warning that names the arena it needs, and the legs' warnings.
+    pub fn narrow_notes(
+        &self,
+        cfg: Named,
+        nodes: usize,
+        budget: &dyn Fn(usize) -> Option<String>,
+    ) -> Vec<String> {
         let e_max = cfg.cfg.search.e_max;
         let legs = self.narrow_legs(e_max);
+        let mut out = Vec::new();
         if legs.is_empty() {
-            return;
+            return out;
         }
-        // With the scenario's roadmap the first path does not come from the trees.
-        if let Some(rm) = cfg
+        // With the scenario's roadmap the first path does not come from the trees, when the
+        // arena can hold it (its search's scratch is the reverse arena's spare slots).
+        let roadmap = cfg
             .cfg
             .tactics
             .roadmap
             .then(|| self.roadmap().ok())
-            .flatten()
-        {
-            for (k, p) in legs {
-                if budget(k).is_none() {
-                    continue;
+            .flatten();
+        match roadmap {
+            Some(rm) if rm.nodes >= nodes => out.push(format!(
+                "warning: {} on {}: the scenario's roadmap has {} nodes and the arena holds \
+                 {nodes} a tree, so the planner runs without it and its first paths come from \
+                 the trees alone (an arena of {} nodes or more keeps the roadmap{})",
+                cfg.name(),
+                self.scenario.name,
+                rm.nodes,
+                rm.nodes + 1,
+                [2048, 4096, 8192]
+                    .into_iter()
+                    .find(|&n| n > rm.nodes)
+                    .map_or(String::new(), |n| format!(": `bench --nodes {n}`"))
+            )),
+            Some(rm) => {
+                for (k, p) in legs {
+                    if budget(k).is_none() {
+                        continue;
+                    }
+                    out.push(format!(
+                        "note: {} on {}, leg {}: {:.0} m of its {:.0} m shortest grid path run \
+                         through passages narrower than e_max / 4; its first path comes from \
+                         the scenario's roadmap ({} nodes), which sampling trees alone \
+                         (`@roadmap=false`, and OMPL's) would be slow to find there",
+                        cfg.name(),
+                        self.scenario.name,
+                        k + 1,
+                        p.narrow_m,
+                        p.length_m,
+                        rm.nodes
+                    ));
                 }
-                eprintln!(
-                    "note: {} on {}, leg {}: {:.0} m of its {:.0} m shortest grid path run \
-                     through passages narrower than e_max / 4; its first path comes from the \
-                     scenario's roadmap ({} nodes), which sampling trees alone (`@roadmap=false`, \
-                     and OMPL's) would be slow to find there",
-                    cfg.name(),
-                    self.scenario.name,
-                    k + 1,
-                    p.narrow_m,
-                    p.length_m,
-                    rm.nodes
-                );
+                return out;
             }
-            return;
+            None => {}
         }
         // The exact shortest path of each leg (once per scenario, whichever planners ask):
         // how many straight pieces a tree path needs about.
@@ -267,9 +309,14 @@ impl Prepared {
         });
         for (k, p) in legs {
             let Some(budget) = budget(k) else { continue };
-            let w = narrow_warning(k, &p, e_max, &budget, pieces[k]);
-            eprintln!("warning: {} on {}, {w}", cfg.name(), self.scenario.name);
+            let w = narrow_warning(k, &p, e_max, &budget, pieces[k], nodes);
+            out.push(format!(
+                "warning: {} on {}, {w}",
+                cfg.name(),
+                self.scenario.name
+            ));
         }
+        out
     }
 
     /// The grid graph (for the geodesic metric).
@@ -673,20 +720,22 @@ pub fn optimum_with_disc(s: &Scenario, c: Circle, a: Point, b: Point) -> Option<
 }
 
 /// The warning for leg `k` (0-based) of [`Prepared::narrow_legs`] for `e_max`; `budget` says
-/// what the planner has for it ("within the leg's 3000 calls").
+/// what the planner has for it ("within the leg's 3000 calls"), `arena` how many nodes a tree
+/// holds.
 pub fn narrow_warning(
     k: usize,
     p: &crate::metric::grid_planners::Passages,
     e_max: f32,
     budget: &str,
     pieces: Option<usize>,
+    arena: usize,
 ) -> String {
     // A tree path joining the goal has about a node a straight piece of the shortest path.
     let nodes = pieces.map_or(String::new(), |n| {
         format!(
             "; its exact shortest path has {n} straight pieces, so a tree path to the goal \
-             needs about {n} nodes and the two trees hold {NODES} each{}",
-            if n > 2 * NODES {
+             needs about {n} nodes and the two trees hold {arena} each{}",
+            if n > 2 * arena {
                 ": more than they can hold"
             } else {
                 ""

@@ -224,7 +224,7 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
             .collect::<Result<Vec<Named>>>()?;
         for cfg in &fitted {
             let last = args.budgets.last().copied().unwrap_or(0.0);
-            prep.warn_narrow_legs(*cfg, &|k| {
+            prep.warn_narrow_legs(*cfg, args.nodes, &|k| {
                 (args.legs.is_empty() || args.legs.contains(&(k + 1)))
                     .then(|| format!("within {last} s"))
             });

@@ -431,7 +431,7 @@ pub fn run(args: &ExperimentArgs) -> Result<Outcome> {
     // Legs through long narrow corridors, said before the runs (issue 42).
     for prep in &preps {
         for cfg in &planners {
-            prep.warn_narrow_legs(cfg.config_for(prep)?, &|k| {
+            prep.warn_narrow_legs(cfg.config_for(prep)?, crate::sim::NODES, &|k| {
                 Some(format!(
                     "within the leg's {} calls",
                     prep.leg_calls(k, &Default::default())

@@ -218,7 +218,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         )
     };
     // Legs through long narrow corridors: said before the run, not after it.
-    prep.warn_narrow_legs(cfg, &|k| {
+    prep.warn_narrow_legs(cfg, crate::sim::NODES, &|k| {
         goals.contains(&k).then(|| {
             format!(
                 "within the leg's {} calls",
