@@ -293,9 +293,7 @@ fn drive_run(
         let runs: Vec<GoalRun> = match kind {
             ClockKind::Wall => drive_each(p, prep, &wall, &goals, &protocol, hook, |_| {})?,
             ClockKind::Cpu => drive_each(p, prep, &cpu, &goals, &protocol, hook, |_| {})?,
-            ClockKind::CpuMono => {
-                drive_each(p, prep, &cpu_mono, &goals, &protocol, hook, |_| {})?
-            }
+            ClockKind::CpuMono => drive_each(p, prep, &cpu_mono, &goals, &protocol, hook, |_| {})?,
             ClockKind::Virtual => drive_each(p, prep, &virt, &goals, &protocol, hook, |_| {})?,
         };
         Ok((runs, p.tree().len()))
