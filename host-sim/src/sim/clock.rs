@@ -229,8 +229,9 @@ mod tests {
     use super::*;
 
     /// The clock never goes back, never reads less than the thread's CPU time, nor more
-    /// than the real time since it was made (give or take a system call's time); it reads the CPU time again once a millisecond
-    /// of real time has passed (a busy loop of 5 ms with reads every few us).
+    /// than the real time since it was made (give or take a system call's time); it reads
+    /// the CPU time again once a millisecond of real time has passed (a busy loop of 5 ms
+    /// with reads every few us).
     #[test]
     fn cpu_mono_never_goes_back_and_stays_between_cpu_and_real_time() {
         let made = Instant::now();
