@@ -210,7 +210,7 @@ fn a_leg_through_one_cell_corridors_is_named_before_the_run() {
         "{notes:?}"
     );
     assert!(
-        notes[1].contains(&format!("leg 1: ")) && notes[1].contains(&format!("hold {rm} each")),
+        notes[1].contains("leg 1: ") && notes[1].contains(&format!("hold {rm} each")),
         "{notes:?}"
     );
     // A maze of 8 m corridors in 1 m cells (256 m across): wider than e_max / 4.
