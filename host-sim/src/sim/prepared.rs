@@ -24,6 +24,8 @@ use crate::scenario::Scenario;
 
 /// Nodes per tree in the simulator (office needs several thousand).
 pub const NODES: usize = 8192;
+/// The arenas the simulator is compiled for, nodes per tree (`host-sim bench --nodes`).
+pub const BENCH_ARENAS: [usize; 3] = [2048, 4096, 8192];
 /// Spatial-index buckets per tree (5 m buckets cover a 200 m map).
 pub const BUCKETS: usize = 2048;
 /// Dynamic obstacles at most.
@@ -267,7 +269,7 @@ impl Prepared {
                 self.scenario.name,
                 rm.nodes,
                 rm.nodes + 1,
-                [2048, 4096, 8192]
+                BENCH_ARENAS
                     .into_iter()
                     .find(|&n| n > rm.nodes)
                     .map_or(String::new(), |n| format!(": `bench --nodes {n}`"))

@@ -282,7 +282,12 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                         2048 => run.on(&mut arenas.n2048),
                         4096 => run.on(&mut arenas.n4096),
                         8192 => run.on(&mut arenas.n8192),
-                        n => return Err(anyhow!("--nodes {n}: use 2048, 4096 or 8192")),
+                        n => {
+                            return Err(anyhow!(
+                                "--nodes {n}: use one of {:?}",
+                                crate::sim::BENCH_ARENAS
+                            ));
+                        }
                     }?;
                     if seed == 0 {
                         continue;

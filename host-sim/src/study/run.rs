@@ -193,7 +193,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let now_s = || match args.clock {
         ClockKind::Wall => wall_clock.now() as f64 / wall_clock.ticks_per_second() as f64,
         ClockKind::Cpu => cpu_clock.now() as f64 / cpu_clock.ticks_per_second() as f64,
-        ClockKind::CpuMono => cpu_mono_clock.now() as f64 / 1e9,
+        ClockKind::CpuMono => {
+            cpu_mono_clock.now() as f64 / cpu_mono_clock.ticks_per_second() as f64
+        }
         ClockKind::Virtual => virtual_clock.peek() as f64 / virtual_clock.ticks_per_second() as f64,
     };
     let leg_starts = crate::metric::optimum::leg_starts(&prep.scenario);
