@@ -578,3 +578,110 @@ fn regression_a_maze_of_one_cell_corridors_joins_over_its_roadmap() {
         from = goal;
     }
 }
+
+/// Blocks of 6 x 6 cells at 0.05 m on a lattice of `pitch` cells (each nudged by up to
+/// `nudge` cells by a seeded hash), `n x n` of them, and with `specks` a speck (one cell) 7
+/// cells off the corner of one block in three (with `nudge` 2 and `pitch` 24, nothing else
+/// within 6 cells); start and goal in opposite corners.
+fn blocks(n: u16, pitch: u16, nudge: u16, specks: bool) -> Scenario {
+    let side = n * pitch + 20;
+    let far = f32::from(side) * 0.05 - 0.3;
+    scenario(
+        &format!("blocks{n}"),
+        side,
+        side,
+        0.05,
+        |c, r| {
+            if c < 10 || r < 10 || c >= side - 10 || r >= side - 10 {
+                return false;
+            }
+            let (bc, br) = ((c - 10) / pitch, (r - 10) / pitch);
+            if bc >= n || br >= n {
+                return false;
+            }
+            let (x, y) = ((c - 10) % pitch, (r - 10) % pitch);
+            let jc = (noise(1, bc, br) * f64::from(nudge + 1)) as u16;
+            let jr = (noise(2, bc, br) * f64::from(nudge + 1)) as u16;
+            let block = (3 + jc..9 + jc).contains(&x) && (3 + jr..9 + jr).contains(&y);
+            let speck = specks && x == 17 && y == 17 && noise(3, bc, br) < 1.0 / 3.0;
+            block || speck
+        },
+        (0.3, 0.3),
+        &[(far, far)],
+    )
+}
+
+/// A speck (an obstacle within 0.15 m of its corner, nothing else within 0.3 m) adds no node
+/// to the roadmap, but its cell still blocks the edges through it. The rooms4096 building
+/// (4,096 cells at 0.05 m, one cell in 2,000 a speck of sensor noise) kept 38,456 corners,
+/// over the bake's cap, so it had no roadmap, and the agent drove 1.09-1.55 times the optimum
+/// through the wrong doors (`docs/notebook/long-runs.md`).
+#[test]
+fn regression_specks_of_noise_add_no_roadmap_node() {
+    let bake = |s: &Scenario| {
+        let prep = host_sim::sim::Prepared::new(s.clone()).without_optimum();
+        prep.roadmap().unwrap().clone()
+    };
+    let (clean, noisy) = (blocks(8, 24, 2, false), blocks(8, 24, 2, true));
+    let (a, b) = (bake(&clean), bake(&noisy));
+    assert_eq!(a.nodes, 4 * 64, "a node off each corner of each block");
+    assert_eq!(b.nodes, a.nodes, "the specks add none");
+    // Edges of the clean map's roadmap run through specks; none of the noisy map's does.
+    let grid = noisy.map.grid();
+    let through = |bytes: &[u8]| {
+        let rm = bi_am_rrt::roadmap::Roadmap::from_bytes(bytes).unwrap();
+        (0..rm.len())
+            .flat_map(|i| rm.neighbours(i).map(move |j| (i, j)))
+            .filter(|&(i, j)| !grid.segment_free(rm.node(i).unwrap(), rm.node(j).unwrap()))
+            .count()
+    };
+    assert!(
+        through(&a.bytes) > 0,
+        "no edge of the clean map meets a speck"
+    );
+    assert_eq!(through(&b.bytes), 0, "an edge through a speck");
+}
+
+/// A roadmap of more nodes than the simulator's trees hold (8,192: the search's scratch is the
+/// reverse arena's spare slots) gets trees of 16,384 nodes in `run` and `bench`, and the first
+/// path comes from it: before, the planner ran without it and said so.
+#[test]
+fn a_roadmap_bigger_than_the_arena_gets_a_bigger_arena() {
+    use bi_am_rrt::clock::FakeClock;
+    let prep = host_sim::sim::Prepared::new(blocks(50, 16, 7, false)).without_optimum();
+    let nodes = prep.roadmap().unwrap().nodes;
+    assert!(nodes >= host_sim::sim::NODES, "{nodes} nodes");
+    let tuned = prep.fit(host_sim::sim::planners::parse_planners("tuned").unwrap()[0]);
+    let paper = prep.fit(host_sim::sim::planners::parse_planners("paper").unwrap()[0]);
+    assert_eq!(prep.arena_for(tuned), 16384);
+    assert_eq!(
+        prep.arena_for(paper),
+        host_sim::sim::NODES,
+        "no roadmap, no change"
+    );
+    let goal = prep.scenario.goals[0];
+    host_sim::sim::with_planner_at::<16384, _>(&prep, tuned, 1, prep.scenario.start, |p| {
+        p.set_goal(goal).unwrap();
+        p.set_t_exp(std::time::Duration::from_millis(5)).unwrap();
+        let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+        let progress = p.grow(&clock);
+        assert!(progress.goal_in_tree && p.stats().roadmap);
+        let mut path = vec![Point::ZERO; 16384];
+        let info = p.path(&mut path).unwrap();
+        assert!(info.to_goal && info.len > 2, "{} points", info.len);
+        for w in path[..info.len].windows(2) {
+            assert!(p.map().free_path(w[0], w[1]), "{:?}", w);
+        }
+        Ok(())
+    })
+    .unwrap();
+    // The simulator's usual arena cannot hold it: the planner runs without it.
+    host_sim::sim::with_planner_at::<8192, _>(&prep, tuned, 1, prep.scenario.start, |p| {
+        p.set_goal(goal).unwrap();
+        let clock = FakeClock::nanos().with_work_cost(12).with_step(1);
+        p.grow(&clock);
+        assert!(!p.stats().roadmap);
+        Ok(())
+    })
+    .unwrap();
+}

@@ -25,9 +25,10 @@ pub struct Cmd {
     /// CPU budgets in seconds at which the path cost is read, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "0.01,0.1,1")]
     budgets: Vec<f64>,
-    /// Nodes per tree: 2048, 4096 or 8192.
-    #[arg(long, default_value_t = 8192)]
-    nodes: usize,
+    /// Nodes per tree: 2048, 4096, 8192 or 16384 (default: 8192, or 16384 on a map whose
+    /// roadmap needs more, as `run`)
+    #[arg(long)]
+    nodes: Option<usize>,
     #[command(flatten)]
     table: TableArgs,
     /// Output folder.

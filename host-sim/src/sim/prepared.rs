@@ -24,8 +24,9 @@ use crate::scenario::Scenario;
 
 /// Nodes per tree in the simulator (office needs several thousand).
 pub const NODES: usize = 8192;
-/// The arenas the simulator is compiled for, nodes per tree (`host-sim bench --nodes`).
-pub const BENCH_ARENAS: [usize; 3] = [2048, 4096, 8192];
+/// The arenas the simulator is compiled for, nodes per tree (`host-sim bench --nodes`; `run`
+/// takes the biggest when the scenario's roadmap needs more than [`NODES`]).
+pub const ARENAS: [usize; 4] = [2048, 4096, 8192, 16384];
 /// Spatial-index buckets per tree (5 m buckets cover a 200 m map).
 pub const BUCKETS: usize = 2048;
 /// Dynamic obstacles at most.
@@ -103,6 +104,25 @@ impl Prepared {
             })
             .as_ref()
             .map_err(|e| anyhow!("{e}"))
+    }
+
+    /// The nodes a tree of a run with `cfg` holds: [`NODES`], or, when `cfg` has the `roadmap`
+    /// tactic and the scenario's roadmap needs more (its search's scratch is the reverse
+    /// arena's spare slots: a node each, and one more), the smallest of [`ARENAS`] that holds
+    /// it. A building of 200 m at 0.05 m has a roadmap of 11,473 nodes; without it the trees'
+    /// first paths there go through the wrong doors (`docs/notebook/long-runs.md`).
+    pub fn arena_for(&self, cfg: Named) -> usize {
+        let need = cfg
+            .cfg
+            .tactics
+            .roadmap
+            .then(|| self.roadmap().ok().map(|r| r.nodes + 1))
+            .flatten()
+            .unwrap_or(0);
+        ARENAS
+            .into_iter()
+            .find(|&n| n >= NODES && n >= need)
+            .unwrap_or(NODES)
     }
 
     /// Attaches the scenario's roadmap to `planner` when its configuration has the `roadmap`
@@ -269,7 +289,7 @@ impl Prepared {
                 self.scenario.name,
                 rm.nodes,
                 rm.nodes + 1,
-                BENCH_ARENAS
+                ARENAS
                     .into_iter()
                     .find(|&n| n > rm.nodes)
                     .map_or(String::new(), |n| format!(": `bench --nodes {n}`"))
@@ -524,26 +544,26 @@ pub struct GoalRun {
 }
 
 /// Drives `planner` through `goals` (indices into the scenario's goals) in order.
-pub fn drive<'s, 't, C: Clock + ?Sized>(
-    planner: &mut SimPlanner<'s, 't>,
+pub fn drive<'s, 't, C: Clock + ?Sized, const N: usize>(
+    planner: &mut SizedPlanner<'s, 't, N>,
     prep: &Prepared,
     clock: &C,
     goals: &[usize],
     protocol: &Protocol,
-    on_call: impl FnMut(&mut SimPlanner<'s, 't>, usize, bi_am_rrt::Point, u32),
+    on_call: impl FnMut(&mut SizedPlanner<'s, 't, N>, usize, bi_am_rrt::Point, u32),
 ) -> Result<Vec<GoalRun>> {
     drive_each(planner, prep, clock, goals, protocol, on_call, |_| {})
 }
 
 /// [`drive`], calling `on_goal` as each goal's run ends (`run` writes its results goal by
 /// goal). Each leg gets [`Prepared::leg_calls`] calls.
-pub fn drive_each<'s, 't, C: Clock + ?Sized>(
-    planner: &mut SimPlanner<'s, 't>,
+pub fn drive_each<'s, 't, C: Clock + ?Sized, const N: usize>(
+    planner: &mut SizedPlanner<'s, 't, N>,
     prep: &Prepared,
     clock: &C,
     goals: &[usize],
     protocol: &Protocol,
-    mut on_call: impl FnMut(&mut SimPlanner<'s, 't>, usize, bi_am_rrt::Point, u32),
+    mut on_call: impl FnMut(&mut SizedPlanner<'s, 't, N>, usize, bi_am_rrt::Point, u32),
     mut on_goal: impl FnMut(&GoalRun),
 ) -> Result<Vec<GoalRun>> {
     let mut out = Vec::new();
@@ -581,8 +601,8 @@ pub fn drive_each<'s, 't, C: Clock + ?Sized>(
 /// radius `r` is dropped on the planned path at the first path point more than 10 m ahead
 /// (along the path) that is farther than `r + 3` m from the goal and whose disc would not
 /// cover the agent. Returns the disc if one was dropped.
-pub fn drop_on_path(
-    p: &mut SimPlanner<'_, '_>,
+pub fn drop_on_path<const N: usize>(
+    p: &mut SizedPlanner<'_, '_, N>,
     agent: Point,
     leg_start: Point,
     r: f32,
@@ -636,9 +656,9 @@ impl DiscTrack {
 
     /// After a plan call at `now_s` on the run's clock, the agent at `agent`, on the leg that
     /// began at `leg_start`. Returns the disc when this call dropped it.
-    pub fn on_call(
+    pub fn on_call<const N: usize>(
         &mut self,
-        p: &mut SimPlanner<'_, '_>,
+        p: &mut SizedPlanner<'_, '_, N>,
         agent: Point,
         leg_start: Point,
         now_s: f64,
@@ -647,7 +667,7 @@ impl DiscTrack {
             self.travelled += f64::from(last.dist(agent));
         }
         self.last = Some(agent);
-        let goal_cost = |p: &SimPlanner<'_, '_>| {
+        let goal_cost = |p: &SizedPlanner<'_, '_, N>| {
             p.goal_node()
                 .and_then(|g| p.tree().cost(g))
                 .filter(|c| !c.blocked)
@@ -859,8 +879,8 @@ pub fn row_with_optimum(
 }
 
 /// A snapshot of the planner for a picture (`run`'s and `moving`'s).
-pub(crate) fn scene(
-    p: &SimPlanner<'_, '_>,
+pub(crate) fn scene<const N: usize>(
+    p: &SizedPlanner<'_, '_, N>,
     trail: &[Point],
     scenario: &crate::scenario::Scenario,
     active: usize,

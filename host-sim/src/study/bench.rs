@@ -45,8 +45,9 @@ pub struct BenchArgs {
     pub seeds: u64,
     /// CPU budgets at which the tree's path cost is read, in seconds, ascending.
     pub budgets: Vec<f64>,
-    /// Nodes per tree: 2048, 4096 or 8192.
-    pub nodes: usize,
+    /// Nodes per tree: 2048, 4096, 8192 or 16384 (`None`: [`Prepared::arena_for`] each
+    /// planner on each map, as `run` does).
+    pub nodes: Option<usize>,
     /// Output directory.
     pub out: PathBuf,
     /// Diffusion table layout.
@@ -224,7 +225,8 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
             .collect::<Result<Vec<Named>>>()?;
         for cfg in &fitted {
             let last = args.budgets.last().copied().unwrap_or(0.0);
-            prep.warn_narrow_legs(*cfg, args.nodes, &|k| {
+            let nodes = args.nodes.unwrap_or_else(|| prep.arena_for(*cfg));
+            prep.warn_narrow_legs(*cfg, nodes, &|k| {
                 (args.legs.is_empty() || args.legs.contains(&(k + 1)))
                     .then(|| format!("within {last} s"))
             });
@@ -278,14 +280,15 @@ pub fn run(args: &BenchArgs) -> Result<Vec<BenchRow>> {
                         equal_at,
                         until_first: args.until_first,
                     };
-                    let r = match args.nodes {
+                    let r = match args.nodes.unwrap_or_else(|| prep.arena_for(cfg)) {
                         2048 => run.on(&mut arenas.n2048),
                         4096 => run.on(&mut arenas.n4096),
                         8192 => run.on(&mut arenas.n8192),
+                        16384 => run.on(&mut arenas.n16384),
                         n => {
                             return Err(anyhow!(
                                 "--nodes {n}: use one of {:?}",
-                                crate::sim::BENCH_ARENAS
+                                crate::sim::ARENAS
                             ));
                         }
                     }?;
@@ -729,6 +732,7 @@ struct Arenas {
     n2048: Option<Box<Storage<2048, BUCKETS>>>,
     n4096: Option<Box<Storage<4096, BUCKETS>>>,
     n8192: Option<Box<Storage<8192, BUCKETS>>>,
+    n16384: Option<Box<Storage<16384, BUCKETS>>>,
 }
 
 /// One run of the bench: a variant on a leg with a seed.

@@ -20,7 +20,7 @@ use crate::draw::{self, Animation, Painter, Scene};
 use crate::scenario::Scenario;
 use crate::sim::clock::{ClockKind, VIRTUAL_NS_PER_UNIT, WallClock, virtual_clock};
 use crate::sim::scene;
-use crate::sim::{GoalRun, Prepared, SimPlanner, drive_each, with_planner};
+use crate::sim::{GoalRun, NODES, Prepared, SizedPlanner, drive_each, with_planner_at};
 
 /// Arguments of `run`.
 pub struct RunArgs {
@@ -53,14 +53,14 @@ pub struct RunArgs {
 /// the trees changed): `(found, meet)`, the scene at the join and, for a bidirectional
 /// planner that joined through a meet, the same moment with the reverse tree as it was just
 /// before the meet cleared it and the joining segment (the paper's Fig. 7b).
-fn join_scenes(
+fn join_scenes<const N: usize>(
     prep: &Prepared,
     mut cfg: bi_am_rrt::Named,
     seed: u64,
 ) -> Result<(Option<Scene>, Option<Scene>)> {
     cfg.cfg.budget.max_expansions = 1;
     let clock = virtual_clock(VIRTUAL_NS_PER_UNIT);
-    with_planner(prep, cfg, seed, |p| {
+    with_planner_at::<N, _>(prep, cfg, seed, prep.scenario.start, |p| {
         p.set_goal(prep.scenario.goals[0])
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         for _ in 0..1_000_000 {
@@ -174,6 +174,31 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
         crate::sim::paper_pace(&mut cfg.cfg);
     }
+    // The trees' arena: the simulator's, or the biggest when the scenario's roadmap needs it
+    // (its search's scratch is the reverse arena's spare slots).
+    match prep.arena_for(cfg) {
+        NODES => run_on::<NODES>(args, &prep, cfg, paper),
+        n => {
+            println!(
+                "note: the scenario's roadmap has {} nodes: the trees hold {n} nodes each ({NODES} \
+                 otherwise)",
+                prep.roadmap().map_or(0, |r| r.nodes)
+            );
+            match n {
+                16384 => run_on::<16384>(args, &prep, cfg, paper),
+                _ => Err(anyhow::anyhow!("no arena of {n} nodes")),
+            }
+        }
+    }
+}
+
+/// [`run`] with trees of `N` nodes each.
+fn run_on<const N: usize>(
+    args: &RunArgs,
+    prep: &Prepared,
+    cfg: bi_am_rrt::Named,
+    paper: bool,
+) -> Result<()> {
     std::fs::create_dir_all(&args.out)?;
     let goals: Vec<usize> = if args.all_goals {
         (0..prep.scenario.goals.len()).collect()
@@ -220,7 +245,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         )
     };
     // Legs through long narrow corridors: said before the run, not after it.
-    prep.warn_narrow_legs(cfg, crate::sim::NODES, &|k| {
+    prep.warn_narrow_legs(cfg, N, &|k| {
         goals.contains(&k).then(|| {
             format!(
                 "within the leg's {} calls",
@@ -239,105 +264,110 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut failure: Option<anyhow::Error> = None;
-    let (runs, final_nodes) = with_planner(&prep, cfg, args.seed, |p| {
-        let hook = |p: &mut SimPlanner<'_, '_>, gi: usize, agent: Point, call: u32| {
-            if call == 0 {
-                bar.reset();
-                bar.set_length(u64::from(prep.leg_calls(gi, &protocol)));
-                bar.set_message(format!("{}/{}", gi + 1, prep.scenario.goals.len()));
-            }
-            bar.set_position(u64::from(call));
-            // At the paper's pace every call lasts its full t_exp (as `experiment`).
-            if paper {
-                let end = call_end
-                    .get()
-                    .saturating_add(t_exp_ticks)
-                    .max(virtual_clock.peek());
-                virtual_clock.set(end);
-                call_end.set(end);
-            }
-            if trail.last() != Some(&agent) {
-                trail.push(agent);
-            }
-            let mut legs = legs.borrow_mut();
-            let leg = &mut legs[gi];
-            if leg.is_empty() {
-                leg.push(leg_starts[gi]);
-            }
-            if leg.last() != Some(&agent) {
-                leg.push(agent);
-            }
-            let mut save = |name: &str, s: &Scene| {
-                let r = painter.png(s, &out.join(name));
-                match r {
-                    Ok(()) => pictures.push(name.to_string()),
-                    Err(e) => {
-                        failure.get_or_insert(e);
+    let (runs, final_nodes) = with_planner_at::<N, _>(
+        prep,
+        cfg,
+        args.seed,
+        prep.scenario.start,
+        |p| {
+            let hook = |p: &mut SizedPlanner<'_, '_, N>, gi: usize, agent: Point, call: u32| {
+                if call == 0 {
+                    bar.reset();
+                    bar.set_length(u64::from(prep.leg_calls(gi, &protocol)));
+                    bar.set_message(format!("{}/{}", gi + 1, prep.scenario.goals.len()));
+                }
+                bar.set_position(u64::from(call));
+                // At the paper's pace every call lasts its full t_exp (as `experiment`).
+                if paper {
+                    let end = call_end
+                        .get()
+                        .saturating_add(t_exp_ticks)
+                        .max(virtual_clock.peek());
+                    virtual_clock.set(end);
+                    call_end.set(end);
+                }
+                if trail.last() != Some(&agent) {
+                    trail.push(agent);
+                }
+                let mut legs = legs.borrow_mut();
+                let leg = &mut legs[gi];
+                if leg.is_empty() {
+                    leg.push(leg_starts[gi]);
+                }
+                if leg.last() != Some(&agent) {
+                    leg.push(agent);
+                }
+                let mut save = |name: &str, s: &Scene| {
+                    let r = painter.png(s, &out.join(name));
+                    match r {
+                        Ok(()) => pictures.push(name.to_string()),
+                        Err(e) => {
+                            failure.get_or_insert(e);
+                        }
+                    }
+                };
+                let dropped = disc.as_ref().is_some_and(|d| d.disc.is_some());
+                if dropped && !avoided_drawn {
+                    let mut path = vec![Point::ZERO; p.tree().len().max(1)];
+                    if p.path(&mut path).is_ok_and(|i| i.to_goal && !i.blocked) {
+                        avoided_drawn = true;
+                        save(
+                            "avoided.png",
+                            &scene(p, &trail, &prep.scenario, gi, title("path around the disc")),
+                        );
                     }
                 }
-            };
-            let dropped = disc.as_ref().is_some_and(|d| d.disc.is_some());
-            if dropped && !avoided_drawn {
-                let mut path = vec![Point::ZERO; p.tree().len().max(1)];
-                if p.path(&mut path).is_ok_and(|i| i.to_goal && !i.blocked) {
-                    avoided_drawn = true;
+                if let Some(d) = disc.as_mut().filter(|_| gi == goals[0])
+                    && let Some(c) = d.on_call(p, agent, leg_starts[gi], now_s())
+                {
+                    println!(
+                        "dropped a disc of radius {} m at ({:.1}, {:.1}) on the path",
+                        c.radius, c.center.x, c.center.y
+                    );
                     save(
-                        "avoided.png",
-                        &scene(p, &trail, &prep.scenario, gi, title("path around the disc")),
+                        "obstacle.png",
+                        &scene(
+                            p,
+                            &trail,
+                            &prep.scenario,
+                            gi,
+                            title("a disc drops on the path"),
+                        ),
                     );
                 }
-            }
-            if let Some(d) = disc.as_mut().filter(|_| gi == goals[0])
-                && let Some(c) = d.on_call(p, agent, leg_starts[gi], now_s())
-            {
-                println!(
-                    "dropped a disc of radius {} m at ({:.1}, {:.1}) on the path",
-                    c.radius, c.center.x, c.center.y
-                );
-                save(
-                    "obstacle.png",
-                    &scene(
+                if let (Some(every), Some(a)) = (args.animate, animation.as_mut())
+                    && call.is_multiple_of(every.max(1))
+                    && failure.is_none()
+                {
+                    let s = scene(
                         p,
                         &trail,
                         &prep.scenario,
                         gi,
-                        title("a disc drops on the path"),
-                    ),
-                );
-            }
-            if let (Some(every), Some(a)) = (args.animate, animation.as_mut())
-                && call.is_multiple_of(every.max(1))
-                && failure.is_none()
-            {
-                let s = scene(
-                    p,
-                    &trail,
-                    &prep.scenario,
-                    gi,
-                    title(&format!("goal {}, call {call}", gi + 1)),
-                );
-                if let Err(e) = a.frame(&s) {
-                    failure = Some(e);
+                        title(&format!("goal {}, call {call}", gi + 1)),
+                    );
+                    if let Err(e) = a.frame(&s) {
+                        failure = Some(e);
+                    }
                 }
-            }
-        };
-        // As each goal ends: a line, and result.json with the goals so far (the optimum, a
-        // separate step, comes last: a run is never lost to it).
-        let mut done: Vec<Row> = Vec::new();
-        let mut write_error: Option<anyhow::Error> = None;
-        let on_goal = |g: &GoalRun| {
-            let r = crate::sim::row_with_optimum(
-                &prep,
-                None,
-                cfg,
-                args.seed,
-                g,
-                args.clock,
-                0,
-                None,
-                started.elapsed().as_secs_f64(),
-            );
-            bar.suspend(|| {
+            };
+            // As each goal ends: a line, and result.json with the goals so far (the optimum, a
+            // separate step, comes last: a run is never lost to it).
+            let mut done: Vec<Row> = Vec::new();
+            let mut write_error: Option<anyhow::Error> = None;
+            let on_goal = |g: &GoalRun| {
+                let r = crate::sim::row_with_optimum(
+                    prep,
+                    None,
+                    cfg,
+                    args.seed,
+                    g,
+                    args.clock,
+                    0,
+                    None,
+                    started.elapsed().as_secs_f64(),
+                );
+                bar.suspend(|| {
                 println!(
                     "  goal {} of {}: reached {}, travelled {:.2} m, {} collisions, {} plan calls of at most {} ({:.1} s)",
                     g.goal_index + 1,
@@ -350,35 +380,40 @@ pub fn run(args: &RunArgs) -> Result<()> {
                     started.elapsed().as_secs_f64()
                 )
             });
-            done.push(r);
-            if let Err(e) = write_result(&args.out, &prep, &done, &legs.borrow()) {
-                write_error.get_or_insert(e);
+                done.push(r);
+                if let Err(e) = write_result(&args.out, prep, &done, &legs.borrow()) {
+                    write_error.get_or_insert(e);
+                }
+            };
+            let runs: Vec<GoalRun> = match args.clock {
+                ClockKind::Wall => {
+                    drive_each(p, prep, &wall_clock, &goals, &protocol, hook, on_goal)?
+                }
+                ClockKind::Cpu => {
+                    drive_each(p, prep, &cpu_clock, &goals, &protocol, hook, on_goal)?
+                }
+                ClockKind::CpuMono => {
+                    drive_each(p, prep, &cpu_mono_clock, &goals, &protocol, hook, on_goal)?
+                }
+                ClockKind::Virtual => {
+                    drive_each(p, prep, &virtual_clock, &goals, &protocol, hook, on_goal)?
+                }
+            };
+            bar.finish_and_clear();
+            if let Some(e) = write_error {
+                return Err(e.context("writing result.json"));
             }
-        };
-        let runs: Vec<GoalRun> = match args.clock {
-            ClockKind::Wall => drive_each(p, &prep, &wall_clock, &goals, &protocol, hook, on_goal)?,
-            ClockKind::Cpu => drive_each(p, &prep, &cpu_clock, &goals, &protocol, hook, on_goal)?,
-            ClockKind::CpuMono => {
-                drive_each(p, &prep, &cpu_mono_clock, &goals, &protocol, hook, on_goal)?
-            }
-            ClockKind::Virtual => {
-                drive_each(p, &prep, &virtual_clock, &goals, &protocol, hook, on_goal)?
-            }
-        };
-        bar.finish_and_clear();
-        if let Some(e) = write_error {
-            return Err(e.context("writing result.json"));
-        }
-        let last = runs.last().map_or(0, |g| g.goal_index);
-        let s = scene(p, &trail, &prep.scenario, last, title("the end"));
-        painter.png(&s, &out.join("final.png"))?;
-        painter.svg(&s, &out.join("final.svg"))?;
-        Ok((runs, p.tree().len()))
-    })?;
+            let last = runs.last().map_or(0, |g| g.goal_index);
+            let s = scene(p, &trail, &prep.scenario, last, title("the end"));
+            painter.png(&s, &out.join("final.png"))?;
+            painter.svg(&s, &out.join("final.svg"))?;
+            Ok((runs, p.tree().len()))
+        },
+    )?;
     if let Some(e) = failure {
         return Err(e.context("drawing a picture"));
     }
-    let (found, meet) = join_scenes(&prep, cfg, args.seed)?;
+    let (found, meet) = join_scenes::<N>(prep, cfg, args.seed)?;
     if let Some(mut s) = found {
         s.title = title("goal 1 joins the tree (replayed one expansion per call)");
         painter.png(&s, &args.out.join("found.png"))?;
@@ -410,7 +445,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .iter()
         .map(|g| {
             row(
-                &prep,
+                prep,
                 cfg,
                 args.seed,
                 g,
@@ -423,7 +458,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .collect();
     let mut rows = rows;
     if let (Some(d), Some(r)) = (disc.as_ref(), rows.first_mut()) {
-        d.finish(r, &prep, prep.scenario.goals[goals[0]]);
+        d.finish(r, prep, prep.scenario.goals[goals[0]]);
     }
     println!(
         "{} on {} ({}), seed {}, {:?} clock",
@@ -507,7 +542,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(s) = prep.bake_seconds.get() {
         println!("  diffusion table baked in {s:.3} s");
     }
-    write_result(&args.out, &prep, &rows, &legs)?;
+    write_result(&args.out, prep, &rows, &legs)?;
     pictures.push("final.png".into());
     pictures.push("final.svg".into());
     println!(
