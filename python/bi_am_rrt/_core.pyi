@@ -148,14 +148,15 @@ class Planner:
 
     Each ``plan(agent)`` is one control period of ``t_exp`` (150 ms unless ``t_exp_ms``) on
     the planner's clock: ``"virtual"`` (work units at 12 ns; the same answer on every
-    machine) or ``"wall"``. ``nodes`` is 2048, 4096 or 8192 per tree."""
+    machine) or ``"wall"``. ``nodes`` is 2048, 4096, 8192 or 16384 per tree (default: 8192,
+    or 16384 when the scenario's roadmap needs more)."""
 
     def __init__(
         self,
         scenario: Union[Scenario, Map],
         planner: str = "tuned",
         seed: int = 1,
-        nodes: int = 8192,
+        nodes: Optional[int] = None,
         start: Optional[Xy] = None,
         clock: Literal["virtual", "wall"] = "virtual",
         t_exp_ms: Optional[float] = None,

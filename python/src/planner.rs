@@ -1,7 +1,7 @@
 //! `Planner`: the core's planner (Algorithm 1's loop, one `plan` call per control period) on a
 //! scenario, owned by a Python object. The core's planner borrows its storage, its map and its
 //! metric; here one object owns all of them (a self-referential cell, `ouroboros`), in an arena
-//! of 2,048, 4,096 or 8,192 nodes per tree (the sizes `host-sim` is compiled for).
+//! of 2,048, 4,096, 8,192 or 16,384 nodes per tree (the sizes `host-sim` is compiled for).
 //!
 //! The interpreter's lock is released while the planner works (`plan`, `grow`): other Python
 //! threads run meanwhile. A planner is used by one thread at a time (a lock inside).
@@ -49,6 +49,7 @@ enum Sized {
     N2048(Cell<2048>),
     N4096(Cell<4096>),
     N8192(Cell<8192>),
+    N16384(Cell<16384>),
 }
 
 /// Runs `$body` with `$p` bound to the planner, whatever its arena.
@@ -58,6 +59,7 @@ macro_rules! on {
             Sized::N2048(c) => c.with_planner_mut(|$p| $body),
             Sized::N4096(c) => c.with_planner_mut(|$p| $body),
             Sized::N8192(c) => c.with_planner_mut(|$p| $body),
+            Sized::N16384(c) => c.with_planner_mut(|$p| $body),
         }
     };
 }
@@ -142,7 +144,7 @@ impl Refused {
             )),
             Refused::Setup(e) => value(format!("planner: {e}")),
             Refused::Lib(e) => lib(e),
-            Refused::Nodes(n) => value(format!("nodes={n}: 2048, 4096 or 8192")),
+            Refused::Nodes(n) => value(format!("nodes={n}: 2048, 4096, 8192 or 16384")),
         }
     }
 }
@@ -358,7 +360,8 @@ impl Planner {
     ///
     /// - `planner`: `"tuned"` (the default), `"paper"` (Bi-AM-RRT*(D) with Table 2's values),
     ///   or any name of `planner_names()`, with `@field=value` overrides as `host-sim` takes.
-    /// - `seed`: the random stream. `nodes`: 2048, 4096 or 8192 per tree.
+    /// - `seed`: the random stream. `nodes`: 2048, 4096, 8192 or 16384 per tree (default:
+    ///   8192, or 16384 when the scenario's roadmap needs more, as `host-sim run`).
     /// - `clock`: `"virtual"` (work units; deterministic) or `"wall"`. `t_exp_ms`: each call's
     ///   planning time (the paper: 150).
     /// - `params`: parameter-table values by name (`params()` lists them), e.g.
@@ -367,14 +370,14 @@ impl Planner {
     /// - `robot_radius`: the robot's disc (metres; default: the scenario's, a point on a
     ///   `Map`): every waypoint keeps the disc clear of the walls and obstacles.
     #[new]
-    #[pyo3(signature = (scenario, planner="tuned", seed=1, nodes=8192, start=None, clock="virtual", t_exp_ms=None, params=None, live_cells=false, table=None, robot_radius=None))]
+    #[pyo3(signature = (scenario, planner="tuned", seed=1, nodes=None, start=None, clock="virtual", t_exp_ms=None, params=None, live_cells=false, table=None, robot_radius=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         scenario: &Bound<'_, PyAny>,
         planner: &str,
         seed: u64,
-        nodes: usize,
+        nodes: Option<usize>,
         start: Option<Xy>,
         clock: &str,
         t_exp_ms: Option<f64>,
@@ -410,14 +413,17 @@ impl Planner {
         };
         let p = prep.clone();
         // The diffusion bake (seconds on a large map) runs without the interpreter's lock.
-        let sized = py
-            .detach(move || -> Result<Sized, Refused> {
-                Ok(match nodes {
+        let (sized, nodes) = py
+            .detach(move || -> Result<(Sized, usize), Refused> {
+                let nodes = nodes.unwrap_or_else(|| p.arena_for(named));
+                let sized = match nodes {
                     2048 => Sized::N2048(build(p, named, seed, start, live_cells)?),
                     4096 => Sized::N4096(build(p, named, seed, start, live_cells)?),
                     8192 => Sized::N8192(build(p, named, seed, start, live_cells)?),
+                    16384 => Sized::N16384(build(p, named, seed, start, live_cells)?),
                     n => return Err(Refused::Nodes(n)),
-                })
+                };
+                Ok((sized, nodes))
             })
             .map_err(Refused::into_py)?;
         Ok(Self {

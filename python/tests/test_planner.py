@@ -63,6 +63,7 @@ def test_named_planners_reach_the_open_goal(name):
 def test_refusals_are_named_exceptions():
     s = b.Scenario.builtin("bug_trap")
     p = b.Planner(s, t_exp_ms=5)
+    assert p.nodes == 8192, "the default arena on a map whose roadmap fits it"
     arr = s.map.to_array()
     row, col = map(int, np.argwhere(arr)[0])
     wall = ((col + 0.5) * s.map.resolution_m, (row + 0.5) * s.map.resolution_m)
