@@ -148,8 +148,8 @@ class Planner:
 
     Each ``plan(agent)`` is one control period of ``t_exp`` (150 ms unless ``t_exp_ms``) on
     the planner's clock: ``"virtual"`` (work units at 12 ns; the same answer on every
-    machine) or ``"wall"``. ``nodes`` is 2048, 4096, 8192 or 16384 per tree (default: 8192,
-    or 16384 when the scenario's roadmap needs more)."""
+    machine) or ``"wall"``. ``nodes`` is 2048, 4096, 8192, 16384 or 65000 per tree (default:
+    8192, or the smallest that holds the scenario's roadmap)."""
 
     def __init__(
         self,

@@ -1,7 +1,7 @@
 //! `Planner`: the core's planner (Algorithm 1's loop, one `plan` call per control period) on a
 //! scenario, owned by a Python object. The core's planner borrows its storage, its map and its
 //! metric; here one object owns all of them (a self-referential cell, `ouroboros`), in an arena
-//! of 2,048, 4,096, 8,192 or 16,384 nodes per tree (the sizes `host-sim` is compiled for).
+//! of 2,048, 4,096, 8,192, 16,384 or 65,000 nodes per tree (the sizes `host-sim` is compiled for).
 //!
 //! The interpreter's lock is released while the planner works (`plan`, `grow`): other Python
 //! threads run meanwhile. A planner is used by one thread at a time (a lock inside).
@@ -50,6 +50,7 @@ enum Sized {
     N4096(Cell<4096>),
     N8192(Cell<8192>),
     N16384(Cell<16384>),
+    N65000(Cell<65000>),
 }
 
 /// Runs `$body` with `$p` bound to the planner, whatever its arena.
@@ -60,6 +61,7 @@ macro_rules! on {
             Sized::N4096(c) => c.with_planner_mut(|$p| $body),
             Sized::N8192(c) => c.with_planner_mut(|$p| $body),
             Sized::N16384(c) => c.with_planner_mut(|$p| $body),
+            Sized::N65000(c) => c.with_planner_mut(|$p| $body),
         }
     };
 }
@@ -77,6 +79,8 @@ struct Inner {
     clock: Clocks,
 }
 
+// Not inlined: the `match` over the arenas would carry every arena's storage in one frame.
+#[inline(never)]
 fn build<const N: usize>(
     prep: Arc<Prepared>,
     named: bi_am_rrt::Named,
@@ -144,7 +148,7 @@ impl Refused {
             )),
             Refused::Setup(e) => value(format!("planner: {e}")),
             Refused::Lib(e) => lib(e),
-            Refused::Nodes(n) => value(format!("nodes={n}: 2048, 4096, 8192 or 16384")),
+            Refused::Nodes(n) => value(format!("nodes={n}: 2048, 4096, 8192, 16384 or 65000")),
         }
     }
 }
@@ -360,8 +364,8 @@ impl Planner {
     ///
     /// - `planner`: `"tuned"` (the default), `"paper"` (Bi-AM-RRT*(D) with Table 2's values),
     ///   or any name of `planner_names()`, with `@field=value` overrides as `host-sim` takes.
-    /// - `seed`: the random stream. `nodes`: 2048, 4096, 8192 or 16384 per tree (default:
-    ///   8192, or 16384 when the scenario's roadmap needs more, as `host-sim run`).
+    /// - `seed`: the random stream. `nodes`: 2048, 4096, 8192, 16384 or 65000 per tree
+    ///   (default: 8192, or the smallest that holds the scenario's roadmap, as `host-sim run`).
     /// - `clock`: `"virtual"` (work units; deterministic) or `"wall"`. `t_exp_ms`: each call's
     ///   planning time (the paper: 150).
     /// - `params`: parameter-table values by name (`params()` lists them), e.g.
@@ -421,6 +425,7 @@ impl Planner {
                     4096 => Sized::N4096(build(p, named, seed, start, live_cells)?),
                     8192 => Sized::N8192(build(p, named, seed, start, live_cells)?),
                     16384 => Sized::N16384(build(p, named, seed, start, live_cells)?),
+                    65000 => Sized::N65000(build(p, named, seed, start, live_cells)?),
                     n => return Err(Refused::Nodes(n)),
                 };
                 Ok((sized, nodes))

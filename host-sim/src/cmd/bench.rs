@@ -25,8 +25,8 @@ pub struct Cmd {
     /// CPU budgets in seconds at which the path cost is read, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "0.01,0.1,1")]
     budgets: Vec<f64>,
-    /// Nodes per tree: 2048, 4096, 8192 or 16384 (default: 8192, or 16384 on a map whose
-    /// roadmap needs more, as `run`)
+    /// Nodes per tree: 2048, 4096, 8192, 16384 or 65000 (default: 8192, or the smallest that
+    /// holds the map's roadmap, as `run`)
     #[arg(long)]
     nodes: Option<usize>,
     #[command(flatten)]

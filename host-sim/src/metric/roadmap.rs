@@ -38,13 +38,14 @@ pub const MAX_ANGLE_DEG: f32 = 165.0;
 /// its corner's vertex has no nodes: on a SLAM map at 0.05 m it is a speck of sensor noise a
 /// cell or two across, a path bends round it by less than a cell, and a building of 200 m
 /// has thousands of them. Its cells still block the edges (every edge is tested on the grid).
-/// Cells of 0.25 m or more are never specks.
+/// Cells of 0.25 m or more are never specks. For a robot of radius `r` the bake reads the
+/// grid inflated by `r`, where a speck has grown by `r` all round: `SPECK_M + 2 r` there.
 pub const SPECK_M: f32 = 0.15;
 /// Most nodes a bake keeps: the edges are found by testing every pair (a building of 200 m at
 /// 0.05 m, 11,473 nodes: 11 s of CPU), and a planner's reverse arena must hold the search's
 /// scratch (`N - 1` nodes): the simulator's biggest arena holds 16,384 a tree
 /// ([`crate::sim::ARENAS`]; [`crate::sim::Prepared::arena_for`]).
-pub const MAX_NODES: usize = 16_000;
+pub const MAX_NODES: usize = 60_000;
 
 /// The greedy spanner's stretch: an edge is dropped when the edges kept already join its ends
 /// within this factor of its length. On a map of many small obstacles (nav2's depot: 40 edges
@@ -131,17 +132,18 @@ pub fn of_scenario(sc: &crate::scenario::Scenario) -> Result<Baked> {
         .space
         .as_ref()
         .map_or_else(|| sc.map.grid(), |s| s.grid());
-    bake(&space, &map.metric_grid(), MAX_NODES)
+    bake(&space, &map.metric_grid(), sc.robot_radius, MAX_NODES)
         .map_err(|e| anyhow::anyhow!("scenario {}: {e:#}", sc.name))
 }
 
 /// Bakes the roadmap of `space` (the grid the planner tests paths on: the scenario's, or the
 /// grid inflated for the robot's body) for the planner's map `metric_grid` (its
-/// `Map::metric_grid`: the roadmap records its hash and size). Errors when more than
-/// `max_nodes` nodes are kept.
+/// `Map::metric_grid`: the roadmap records its hash and size); `radius` is the robot's, by
+/// which `space` was inflated (0: a point). Errors when more than `max_nodes` nodes are kept.
 pub fn bake(
     space: &OccupancyGrid<'_>,
     metric_grid: &OccupancyGrid<'_>,
+    radius: f32,
     max_nodes: usize,
 ) -> Result<Baked> {
     let cell = space.cell_size();
@@ -152,6 +154,10 @@ pub fn bake(
     let reach = ((HULL_M / cell).round() as i32).max(2);
     let join = ((HULL_M / cell).round() as i32).max(1);
     let widest = MAX_ANGLE_DEG.to_radians();
+    // A speck grows by the body's radius all round on the inflated grid; the flood's window
+    // reaches past it (for a point, the outline's own window).
+    let speck = SPECK_M + 2.0 * radius.max(0.0);
+    let win = reach.max((speck / cell).ceil() as i32 + 1);
     let mut nodes: Vec<Point> = Vec::new();
     let mut corners: Vec<u8> = Vec::new();
     let mut dirs: Vec<(f32, f32)> = Vec::new();
@@ -180,16 +186,17 @@ pub fn bake(
             // joined to the corner's own cell within it, across gaps narrower than `HULL_M`
             // (`join` cells: on a fine map pixel noise beside a wall is part of the wall; on
             // a coarse one another wall across a corridor is another obstacle, as in a maze
-            // of 1-cell corridors, where every wall's end is a corner a path bends round).
-            let side = 2 * reach as usize;
+            // of 1-cell corridors, where every wall's end is a corner a path bends round). The
+            // flood runs to `win` cells, the angles count within `reach`.
+            let side = 2 * win as usize;
             let inside = |c: i32, r: i32| {
                 let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
-                (-reach..reach).contains(&c)
-                    && (-reach..reach).contains(&r)
-                    && x * x + y * y <= (reach * reach) as f32
+                (-win..win).contains(&c)
+                    && (-win..win).contains(&r)
+                    && x * x + y * y <= (win * win) as f32
                     && occ(vx + c, vy + r)
             };
-            let at = |c: i32, r: i32| ((r + reach) as usize) * side + (c + reach) as usize;
+            let at = |c: i32, r: i32| ((r + win) as usize) * side + (c + win) as usize;
             window.clear();
             window.resize(side * side, false);
             let own = (
@@ -203,10 +210,12 @@ pub fn bake(
             while let Some((c, r)) = stack.pop() {
                 let (x, y) = (c as f32 + 0.5, r as f32 + 0.5);
                 far = far.max(x * x + y * y);
-                let a = (d.0 * y - d.1 * x).atan2(d.0 * x + d.1 * y);
-                wraps |= a.abs() > 0.95 * std::f32::consts::PI;
-                lo = lo.min(a);
-                hi = hi.max(a);
+                if x * x + y * y <= (reach * reach) as f32 {
+                    let a = (d.0 * y - d.1 * x).atan2(d.0 * x + d.1 * y);
+                    wraps |= a.abs() > 0.95 * std::f32::consts::PI;
+                    lo = lo.min(a);
+                    hi = hi.max(a);
+                }
                 for dr in -join..=join {
                     for dc in -join..=join {
                         let (nc, nr) = (c + dc, r + dr);
@@ -217,7 +226,7 @@ pub fn bake(
                     }
                 }
             }
-            if wraps || hi - lo >= widest || far.sqrt() * cell <= SPECK_M {
+            if wraps || hi - lo >= widest || far.sqrt() * cell <= speck {
                 continue;
             }
             let p = Point::new(
