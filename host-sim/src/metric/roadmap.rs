@@ -42,9 +42,10 @@ pub const MAX_ANGLE_DEG: f32 = 165.0;
 /// grid inflated by `r`, where a speck has grown by `r` all round: `SPECK_M + 2 r` there.
 pub const SPECK_M: f32 = 0.15;
 /// Most nodes a bake keeps: the edges are found by testing every pair (a building of 200 m at
-/// 0.05 m, 11,473 nodes: 11 s of CPU), and a planner's reverse arena must hold the search's
-/// scratch (`N - 1` nodes): the simulator's biggest arena holds 16,384 a tree
-/// ([`crate::sim::ARENAS`]; [`crate::sim::Prepared::arena_for`]).
+/// 0.05 m, 11,473 nodes: 11 s of CPU; 37,219 for a robot of 0.1 m there: 39 s on two cores),
+/// and a planner's reverse arena must hold the search's scratch (`N - 1` nodes): the
+/// simulator's biggest arena holds 65,000 a tree ([`crate::sim::ARENAS`];
+/// [`crate::sim::Prepared::arena_for`]).
 pub const MAX_NODES: usize = 60_000;
 
 /// The greedy spanner's stretch: an edge is dropped when the edges kept already join its ends
