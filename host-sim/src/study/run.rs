@@ -176,20 +176,19 @@ pub fn run(args: &RunArgs) -> Result<()> {
     }
     // The trees' arena: the simulator's, or a bigger one when the scenario's roadmap needs it
     // (its search's scratch is the reverse arena's spare slots).
-    match prep.arena_for(cfg) {
+    let nodes = prep.arena_for(cfg);
+    if nodes != NODES {
+        println!(
+            "note: the scenario's roadmap has {} nodes: the trees hold {nodes} nodes each ({NODES} \
+             otherwise)",
+            prep.roadmap().map_or(0, |r| r.nodes)
+        );
+    }
+    match nodes {
         NODES => run_on::<NODES>(args, &prep, cfg, paper),
-        n => {
-            println!(
-                "note: the scenario's roadmap has {} nodes: the trees hold {n} nodes each ({NODES} \
-                 otherwise)",
-                prep.roadmap().map_or(0, |r| r.nodes)
-            );
-            match n {
-                16384 => run_on::<16384>(args, &prep, cfg, paper),
-                65000 => run_on::<65000>(args, &prep, cfg, paper),
-                _ => Err(anyhow::anyhow!("no arena of {n} nodes")),
-            }
-        }
+        16384 => run_on::<16384>(args, &prep, cfg, paper),
+        65000 => run_on::<65000>(args, &prep, cfg, paper),
+        n => Err(anyhow::anyhow!("no arena of {n} nodes")),
     }
 }
 
